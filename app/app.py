@@ -1,0 +1,20 @@
+"""Serve with ``panel serve app/app.py`` (page /app)."""
+import sys
+from pathlib import Path
+
+import panel as pn
+
+# `panel serve` puts this file's folder first on sys.path, where `import app` would find
+# this very file; the `app` package is the folder itself, one level up.
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+from app.explorer import Explorer  # noqa: E402
+
+
+def create_app() -> Explorer:
+    """A new, independent session: settings from the URL, its own views and workers."""
+    pn.extension(notifications=False)
+    return Explorer(args=pn.state.session_args)
+
+
+if pn.state.served:
+    create_app().servable(title="Impact Explorer")

@@ -1,0 +1,121 @@
+"""Scene computations shared by all sessions: cached simulations and screen budgets.
+
+Only immutable results are shared: ``pn.cache`` keyed by the frozen ``il.Params`` plus
+the run options, bounded (LRU). Everything here is plain numpy; no widgets.
+"""
+from __future__ import annotations
+
+import dataclasses
+import inspect
+
+import numpy as np
+import panel as pn
+
+import impactlib as il
+
+from .state import Run
+
+#: Evenly spaced samples of x(t), v(t) per time series (impact corners are added).
+SCENE_POINTS = 4000
+#: At most this many impact corners are inserted into the time series.
+MAX_CORNERS = 2000
+#: At most this many points in the impact map and the Poincare map.
+MAX_MAP_POINTS = 20_000
+#: Ceiling on the wall time of one scene simulation (the core stops with partial results).
+SCENE_WALL_TIME = 2.0
+
+_HASH = {il.Params: lambda p: repr(p).encode()}
+_SIMULATE_ARGS = frozenset(inspect.signature(il.simulate).parameters)
+
+
+def run_simulate(params: il.Params, **kw) -> il.Solution:
+    """``il.simulate``, passing ``wall_time`` only if the core accepts it."""
+    if "wall_time" not in _SIMULATE_ARGS:
+        kw.pop("wall_time", None)
+    return il.simulate(params, **kw)
+
+
+@pn.cache(max_items=64, policy="LRU", hash_funcs=_HASH)
+def simulate(key: tuple, dense: int, phase: float) -> il.Solution:
+    """``il.simulate`` for ``Run.scene_key()``; cached across sessions."""
+    params, t_end, t_record, x0, v0, method, dt, rtol, atol = key
+    kw = dict(t_end=t_end, t_record=t_record, x0=x0, v0=v0, method=method, dense=dense,
+              phase=phase, wall_time=SCENE_WALL_TIME)
+    if method == "rk4":
+        kw["dt"] = dt
+    elif method == "rk45":
+        kw.update(rtol=rtol, atol=atol)
+    return run_simulate(params, **kw)
+
+
+def scene_solution(run: Run) -> il.Solution:
+    """The trajectory of the four scene views (dense samples, section at phase 0)."""
+    return simulate(run.scene_key(), SCENE_POINTS, 0.0)
+
+
+def section_solution(run: Run) -> il.Solution:
+    """The same run sampled at the Poincare section psi: a second, impacts-only
+    simulation (no dense output), so a psi change never recomputes the trajectory."""
+    phase = min(max(run.psi, 0.0), run.params.T)
+    return simulate(run.scene_key(), 0, phase)
+
+
+@dataclasses.dataclass(frozen=True)
+class SceneData:
+    """Column data of the scene views, already within the screen budget."""
+
+    run: Run
+    trajectory: dict   # t, x, v (dense samples with exact impact corners)
+    impacts: dict      # t, phase, v (before impact), v_after
+    label: str
+    elapsed: float
+    status: int
+    message: str
+
+
+def trajectory_columns(sol: il.Solution, r: float, g: float) -> dict:
+    """Dense samples merged with the impacts: at each impact time the line passes through
+    (g, v-) and (g, -r v-), so corners and velocity jumps are drawn exactly."""
+    d = sol.dense
+    t = np.asarray(d.t, dtype=float)
+    x = np.asarray(d.x, dtype=float)
+    v = np.asarray(d.v, dtype=float)
+    ti = np.asarray(sol.impacts.t, dtype=float)
+    vi = np.asarray(sol.impacts.v, dtype=float)
+    if ti.size > MAX_CORNERS:
+        keep = np.linspace(0, ti.size - 1, MAX_CORNERS).round().astype(int)
+        ti, vi = ti[keep], vi[keep]
+    if ti.size:
+        tt = np.concatenate([t, ti, ti])
+        xx = np.concatenate([x, np.full(ti.size, g), np.full(ti.size, g)])
+        vv = np.concatenate([v, vi, -r * vi])
+        rank = np.concatenate([np.ones(t.size), np.zeros(ti.size), np.full(ti.size, 2.0)])
+        order = np.lexsort((rank, tt))
+        t, x, v = tt[order], xx[order], vv[order]
+    return {"t": t, "x": x, "v": v}
+
+
+def last(a, n: int) -> np.ndarray:
+    a = np.asarray(a, dtype=float)
+    return a[-n:] if a.size > n else a
+
+
+def build_scene(run: Run) -> SceneData:
+    """Compute (or fetch from the cache) the scene of ``run``. Raises ValueError for
+    settings the core rejects."""
+    sol = scene_solution(run)
+    p = run.params
+    imp = sol.impacts
+    v = last(imp.v, MAX_MAP_POINTS)
+    impacts = {"t": last(imp.t, MAX_MAP_POINTS), "phase": last(imp.phase, MAX_MAP_POINTS),
+               "v": v, "v_after": -p.r * v}
+    return SceneData(run=run, trajectory=trajectory_columns(sol, p.r, p.g), impacts=impacts,
+                 label=il.classify(sol).label, elapsed=float(sol.elapsed),
+                 status=int(sol.status), message=str(sol.message))
+
+
+def section_columns(run: Run) -> dict:
+    sol = section_solution(run)
+    ps = sol.poincare
+    return {"t": last(ps.t, MAX_MAP_POINTS), "x": last(ps.x, MAX_MAP_POINTS),
+            "v": last(ps.v, MAX_MAP_POINTS)}

@@ -1,0 +1,380 @@
+"""The Impact Explorer: one session's controls, views and wiring.
+
+Settings -> validate -> Run. A change recomputes only what depends on it, decided by
+comparing the new Run with the last good one:
+
+- the trajectory key changed (omega, r, c, g, m, k, window, initial state, method):
+  the four scene views, the motion badge and the bifurcation marker;
+- psi (or the trajectory) changed: the Poincaré map only;
+- the diagram key changed (r, c, g, m, k, window, initial state, diagram range):
+  the diagram restarts; omega alone only moves its marker.
+
+Bad settings show a message naming the fields and keep the last good scene; nothing
+raises into Panel (no traceback in the server log).
+"""
+from __future__ import annotations
+
+import io
+import logging
+from concurrent.futures import ThreadPoolExecutor
+
+import numpy as np
+import panel as pn
+import param
+
+from . import accuracy, compute, state
+from .diagram import DiagramRunner
+from .scenes import SCENES
+from .state import Run, Settings
+from .views import BifurcationView, DisplacementView, ImpactMapView, PhaseView, PoincareView
+
+log = logging.getLogger(__name__)
+
+_ACCURACY_POOL = ThreadPoolExecutor(max_workers=1, thread_name_prefix="impact-accuracy")
+
+SIDEBAR_WIDTH = 310
+
+CSS = """
+.ie-badge {font-size: 16px;}
+.ie-badge b {color: #1f5fa8;}
+.ie-accuracy td, .ie-accuracy th {padding: 2px 6px; font-size: 12px; text-align: left;}
+"""
+
+
+def _csv(columns: dict) -> io.StringIO:
+    names = list(columns)
+    data = np.column_stack([np.asarray(columns[n], dtype=float) for n in names]) \
+        if names and len(columns[names[0]]) else np.zeros((0, len(names)))
+    buf = io.StringIO()
+    buf.write(",".join(names) + "\n")
+    np.savetxt(buf, data, delimiter=",", fmt="%.10g")
+    buf.seek(0)
+    return buf
+
+
+def _dispatcher():
+    """Run a function on this session's event loop (safe from any thread)."""
+    doc = pn.state.curdoc
+    if doc is not None and doc.session_context is not None:
+        return doc.add_next_tick_callback
+    return lambda fn: fn()
+
+
+class Explorer(pn.viewable.Viewer):
+    """One session of the app. ``args`` are the URL query arguments."""
+
+    message = param.String(default="", doc="Visible message about rejected input.")
+
+    def __init__(self, args=None, **params):
+        super().__init__(**params)
+        values, errors = state.initial_settings(args or {})
+        self.settings = Settings(**values)
+        self.run: Run | None = None
+        self.scene: compute.SceneData | None = None
+        self.section: dict | None = None
+        self._scene_run: Run | None = None   # run as loaded by the last scene button
+        self._dispatch = _dispatcher()
+        self.displacement = DisplacementView()
+        self.phase = PhaseView()
+        self.impact_map = ImpactMapView()
+        self.poincare = PoincareView()
+        self.bifurcation = BifurcationView()
+        self.runner = DiagramRunner(self._dispatch, self._on_chunk, self._on_done,
+                                    self._on_diagram_error)
+        self.diagram_elapsed: float | None = None
+        self._build_widgets()
+        self.settings.param.watch(self._on_settings, list(state.QUERY_NAMES))
+        self._apply(initial=True)
+        if errors:
+            self._show_message("Some settings in the link were not valid and were "
+                               "replaced by defaults: " + "; ".join(errors))
+        self._layout = self._build_layout()
+        if pn.state.curdoc is not None and pn.state.curdoc.session_context is not None:
+            pn.state.on_session_destroyed(lambda ctx: self.runner.cancel())
+            pn.state.onload(self._write_url)
+
+    # -- widgets and layout ------------------------------------------------------------
+
+    def _build_widgets(self) -> None:
+        s = self.settings
+        p = s.param
+
+        def slider(name, fmt="0.000"):
+            par = p[name]
+            lo, hi = par.softbounds
+            return pn.widgets.EditableFloatSlider.from_param(
+                par, start=lo, end=hi, step=par.step, format=fmt,
+                sizing_mode="stretch_width", name=par.label)
+
+        def number(name, cls=pn.widgets.FloatInput, **kw):
+            par = p[name]
+            return cls.from_param(par, description=par.doc, name=par.label,
+                                  sizing_mode="stretch_width", **kw)
+
+        w = self.widgets = {
+            "omega": slider("omega"), "r": slider("r"), "c": slider("c"),
+            "g": slider("g"), "m": number("m"), "k": number("k"),
+            "psi": slider("psi"),
+            "t_end": number("t_end"), "t_record": number("t_record"),
+            "x0": number("x0"), "v0": number("v0"),
+            "method": pn.widgets.Select.from_param(p.method, name=p.method.label,
+                                                   description=p.method.doc,
+                                                   sizing_mode="stretch_width"),
+            "dt": number("dt", format="0.[000000]"),
+            "rtol": number("rtol", format="0.[0000000000]"),
+            "atol": number("atol", format="0.[000000000000]"),
+            "bif_min": number("bif_min"), "bif_max": number("bif_max"),
+            "bif_n": number("bif_n", cls=pn.widgets.IntInput),
+        }
+        self.message_pane = pn.pane.Alert("", alert_type="warning", visible=False,
+                                          css_classes=["ie-message"],
+                                          sizing_mode="stretch_width")
+        self.badge = pn.pane.HTML("", css_classes=["ie-badge"], sizing_mode="stretch_width",
+                                  stylesheets=[CSS])
+        self.caption = pn.pane.Markdown(
+            "Paper defaults: m = 1, c = 0.05, k = 1, g = 0, r = 0.8, ω = 2. "
+            "Pick a scene of the paper or move a slider.",
+            css_classes=["ie-caption"], sizing_mode="stretch_width")
+        self.scene_buttons = []
+        for sc in SCENES:
+            b = pn.widgets.Button(name=sc.label, button_type="light", margin=(2, 3),
+                                  css_classes=[f"ie-scene-{sc.key}"],
+                                  description=sc.caption.split("**")[1])
+            b.on_click(lambda event, sc=sc: self.load_scene(sc.key))
+            self.scene_buttons.append(b)
+        self.progress = pn.indicators.Progress(value=0, max=100, width=200, height=14,
+                                               bar_color="primary", margin=(8, 10))
+        self.diagram_status = pn.pane.HTML("", css_classes=["ie-diagram-status"],
+                                           sizing_mode="stretch_width")
+        self.downloads = [
+            pn.widgets.FileDownload(callback=self._impacts_csv, filename="impacts.csv",
+                                    label="Impacts (CSV)", button_type="default",
+                                    sizing_mode="stretch_width"),
+            pn.widgets.FileDownload(callback=self._poincare_csv, filename="poincare.csv",
+                                    label="Poincaré points (CSV)", button_type="default",
+                                    sizing_mode="stretch_width"),
+            pn.widgets.FileDownload(callback=self._bifurcation_csv,
+                                    filename="bifurcation.csv",
+                                    label="Bifurcation diagram (CSV)",
+                                    button_type="default", sizing_mode="stretch_width"),
+        ]
+        self.accuracy_button = pn.widgets.Button(
+            name="Compare methods", button_type="primary", sizing_mode="stretch_width",
+            description="Run exact, rk4 and rk45 on the current scene and compare their "
+                        "impacts and run times (not recomputed on slider moves).")
+        self.accuracy_button.on_click(self._on_accuracy)
+        self.accuracy_pane = pn.pane.HTML("", css_classes=["ie-accuracy-out"],
+                                          stylesheets=[CSS], sizing_mode="stretch_width")
+
+    def _with_tip(self, name):
+        """Sliders have no tooltip of their own: an (i) icon with the setting's doc."""
+        doc = self.settings.param[name].doc
+        return pn.Row(self.widgets[name], pn.widgets.TooltipIcon(value=doc, margin=(22, 0, 0, 0)),
+                      sizing_mode="stretch_width")
+
+    def _build_layout(self):
+        w = dict(self.widgets)
+        for name in ("omega", "r", "c", "g", "psi"):
+            w[name] = self._with_tip(name)
+        group = pn.layout.Card
+        sidebar = pn.Column(
+            group(w["omega"], w["r"], w["c"], w["g"], pn.Row(w["m"], w["k"]),
+                  title="Physics", collapsible=False, sizing_mode="stretch_width"),
+            group(w["psi"], title="Poincaré section", collapsible=False,
+                  sizing_mode="stretch_width"),
+            group(pn.Row(w["t_end"], w["t_record"]), pn.Row(w["x0"], w["v0"]),
+                  w["method"], w["dt"], pn.Row(w["rtol"], w["atol"]),
+                  title="Time window, start, method", collapsed=True,
+                  sizing_mode="stretch_width"),
+            group(pn.Row(w["bif_min"], w["bif_max"]), w["bif_n"],
+                  title="Bifurcation diagram range", collapsed=True,
+                  sizing_mode="stretch_width"),
+            group(*self.downloads, title="Downloads", collapsed=True,
+                  sizing_mode="stretch_width"),
+            group(self.accuracy_button, self.accuracy_pane, title="Accuracy",
+                  collapsed=True, sizing_mode="stretch_width"),
+            width=SIDEBAR_WIDTH,
+        )
+        pane = dict(sizing_mode="stretch_width")
+        plots = pn.GridBox(
+            pn.pane.Bokeh(self.displacement.figure, **pane),
+            pn.pane.Bokeh(self.phase.figure, **pane),
+            pn.pane.Bokeh(self.impact_map.figure, **pane),
+            pn.pane.Bokeh(self.poincare.figure, **pane),
+            ncols=2, sizing_mode="stretch_width")
+        main = pn.Column(
+            pn.pane.Markdown("## Impact Explorer — forced oscillator with a rigid endstop",
+                             margin=(0, 10)),
+            self.message_pane,
+            pn.FlexBox(*self.scene_buttons, sizing_mode="stretch_width"),
+            self.caption,
+            self.badge,
+            plots,
+            pn.Row(self.progress, self.diagram_status, sizing_mode="stretch_width"),
+            pn.pane.Bokeh(self.bifurcation.figure, **pane),
+            sizing_mode="stretch_width",
+        )
+        return pn.Row(sidebar, main, sizing_mode="stretch_width")
+
+    def __panel__(self):
+        return self._layout
+
+    # -- state changes -------------------------------------------------------------------
+
+    def load_scene(self, key: str) -> None:
+        """Load one of the paper's scenes (all settings in one batch)."""
+        sc = next(s for s in SCENES if s.key == key)
+        self.settings.param.update(**sc.settings())
+        self.caption.object = sc.caption
+        self._scene_run = self.run
+
+    def _on_settings(self, *events) -> None:
+        try:
+            self._apply()
+        except Exception as exc:   # never raise into Panel: message, keep last scene
+            log.warning("update failed: %s: %s", type(exc).__name__, exc)
+            self._show_message(f"Could not update: {type(exc).__name__}: {exc}")
+
+    def _apply(self, initial: bool = False) -> None:
+        try:
+            run = state.validate(state.snapshot(self.settings))
+        except ValueError as exc:
+            self._show_message(f"Not applied — {exc}. Showing the last valid settings.")
+            return
+        prev = self.run
+        scene_changed = prev is None or run.scene_key() != prev.scene_key()
+        psi_changed = scene_changed or run.psi != prev.psi
+        diagram_changed = prev is None or run.diagram_key() != prev.diagram_key()
+        try:
+            scene = compute.build_scene(run) if scene_changed else self.scene
+            section = compute.section_columns(run) if psi_changed else self.section
+        except ValueError as exc:
+            self._show_message(f"Not applied — {exc}. Showing the last valid settings.")
+            return
+        self.run = run
+        if not initial:
+            self._clear_message()
+        if scene_changed:
+            self.scene = scene
+            self.displacement.update(scene)
+            self.phase.update(scene)
+            self.impact_map.update(scene)
+            self._update_badge(scene)
+        if psi_changed:
+            self.section = section
+            self.poincare.update(run, section)
+        if diagram_changed:
+            self._restart_diagram(run)
+        if scene_changed or diagram_changed:
+            self.bifurcation.move_marker(run.params.omega,
+                                         compute.last(scene.impacts["v"], 200))
+        self._update_caption_note()
+        if not initial:
+            self._write_url()
+
+    def _restart_diagram(self, run: Run) -> None:
+        self.bifurcation.reset(run)
+        self.progress.value = 0
+        self.diagram_elapsed = None
+        self.diagram_status.object = f"computing {run.bif_n} ω values…"
+        self.runner.start(run)
+
+    # -- diagram callbacks (on the event loop) ----------------------------------------
+
+    def _on_chunk(self, gen: int, part: dict, done: int, total: int) -> None:
+        self.bifurcation.append(part)
+        self.progress.value = int(100 * done / total)
+        n = len(self.bifurcation.source.data["omega"])
+        self.diagram_status.object = f"computing… {done}/{total} chunks, {n} impacts"
+
+    def _on_done(self, gen: int, elapsed: float, partial: int) -> None:
+        self.diagram_elapsed = elapsed
+        n = len(self.bifurcation.source.data["omega"])
+        run = self.run
+        note = f", {partial} ω values stopped at a work limit" if partial else ""
+        text = f"complete: {run.bif_n} ω values, {n} impacts in {elapsed:.2f} s{note}"
+        self.diagram_status.object = text
+        self.progress.value = 100
+        self.bifurcation.finish("complete")
+
+    def _on_diagram_error(self, gen: int, text: str) -> None:
+        self.diagram_status.object = f"diagram failed: {text}"
+        self.bifurcation.finish("failed")
+
+    # -- badge, messages, URL ----------------------------------------------------------
+
+    def _update_badge(self, scene: compute.SceneData) -> None:
+        run = scene.run
+        ms = scene.elapsed * 1e3
+        warn = ""
+        if scene.status != 0:
+            warn = f" <span style='color:#b35900'>⚠ {scene.message}</span>"
+        self.badge.object = (f"Motion: <b>{scene.label}</b> · {run.method} · computed in "
+                             f"{ms:.2f} ms{warn}")
+
+    def _update_caption_note(self) -> None:
+        text = self.caption.object
+        note = "\n\n*Settings changed since this scene was loaded.*"
+        if self._scene_run is None:
+            return
+        changed = self.run != self._scene_run
+        if changed and not text.endswith(note):
+            self.caption.object = text + note
+        elif not changed and text.endswith(note):
+            self.caption.object = text[: -len(note)]
+
+    def _show_message(self, text: str) -> None:
+        self.message = text
+        self.message_pane.object = text
+        self.message_pane.visible = True
+
+    def _clear_message(self) -> None:
+        if self.message:
+            self.message = ""
+            self.message_pane.object = ""
+            self.message_pane.visible = False
+
+    def _write_url(self) -> None:
+        loc = pn.state.location
+        if loc is not None and self.run is not None:
+            loc.update_query(**state.to_query(self.run))
+
+    # -- on-demand work ------------------------------------------------------------------
+
+    def _on_accuracy(self, event) -> None:
+        run = self.run
+        self.accuracy_button.disabled = True
+        self.accuracy_pane.object = "computing exact, rk4 and rk45…"
+
+        def work():
+            try:
+                html = accuracy.to_html(accuracy.compare_methods(run))
+            except Exception as exc:
+                log.warning("accuracy failed: %s: %s", type(exc).__name__, exc)
+                html = f"accuracy failed: {type(exc).__name__}: {exc}"
+            self._dispatch(lambda: self._accuracy_done(html))
+
+        _ACCURACY_POOL.submit(work)
+
+    def _accuracy_done(self, html: str) -> None:
+        self.accuracy_pane.object = html
+        self.accuracy_button.disabled = False
+
+    def _filename(self, what: str) -> str:
+        p = self.run.params
+        return f"{what}_omega{p.omega:g}_r{p.r:g}_c{p.c:g}_g{p.g:g}.csv"
+
+    def _impacts_csv(self):
+        self.downloads[0].filename = self._filename("impacts")
+        imp = self.scene.impacts
+        return _csv({"t": imp["t"], "phase": imp["phase"], "v_before": imp["v"],
+                     "v_after": imp["v_after"]})
+
+    def _poincare_csv(self):
+        self.downloads[1].filename = self._filename("poincare")
+        s = self.section
+        return _csv({"t": s["t"], "x": s["x"], "v": s["v"]})
+
+    def _bifurcation_csv(self):
+        self.downloads[2].filename = self._filename("bifurcation")
+        return _csv(self.bifurcation.table())

@@ -1,0 +1,25 @@
+"""View 3: impact map, impact phase τ_I mod T against the velocity before impact."""
+from __future__ import annotations
+
+from bokeh.models import ColumnDataSource, Range1d
+
+from ..compute import SceneData
+from ._figure import IMPACT, make_figure
+
+
+class ImpactMapView:
+    def __init__(self):
+        self.source = ColumnDataSource({"phase": [], "v": []})
+        self.figure = make_figure("impact_map_figure", "Impact map",
+                                  "impact phase τ_I mod T (s)", "impact velocity ẋ(τ_I−)",
+                                  x_range=Range1d(0.0, 3.14159))
+        self.figure.scatter("phase", "v", source=self.source, size=5, color=IMPACT,
+                            alpha=0.8, name="impact_map")
+
+    def update(self, scene: SceneData) -> None:
+        imp = scene.impacts
+        self.source.data = {"phase": imp["phase"], "v": imp["v"]}
+        T = scene.run.params.T
+        self.figure.x_range.update(start=0.0, end=T)
+        n = len(imp["t"])
+        self.figure.title.text = f"Impact map — {n} impacts, T = {T:.4g} s"
