@@ -1,0 +1,208 @@
+"""Impacts, sticking and release for the closed-form flight.
+
+The next impact is the FIRST root of x(t) = g after the current time.  From a point s
+with f = x - g >= 0, f' = v, f'' = a and a bound M3 >= |x'''| ahead (flight.derivative_bounds),
+Taylor's theorem gives the lower bound
+
+    f(s + tau) >= p(tau) = f + v tau + a tau^2 / 2 - M3 tau^3 / 6,
+
+so no root lies before the first positive root of the cubic p.  Stepping to that root
+never passes the wall, however shallow the dip; near a crossing the steps converge to it
+from the left (cubically), near a miss they jump over the minimum once p clears it.
+No fixed sampling step is involved.
+
+Leaving the wall from rest where the force is exactly zero (release), f grows like
+tau^3; the first step there uses the quartic bound with |x''''| <= M4.
+"""
+from __future__ import annotations
+
+import math
+
+from ._jit import jit
+from .flight import C_, G, K, M, OM, R, derivative_bounds, flight_state, release_time, wall_force
+
+EPS = 2.220446049250313e-16
+
+# next_impact outcomes
+NO_IMPACT, IMPACT, STEP_LIMIT = 0, 1, 2
+# impact_outcome modes
+FLY, STICK = 0, 1
+
+
+@jit
+def _lower_cubic(f, f1, f2, m3, tau):
+    return f + tau * (f1 + tau * (0.5 * f2 - tau * m3 / 6.0))
+
+
+@jit
+def _bisect_cubic(f, f1, f2, m3, lo, hi):
+    # p(lo) >= 0 > p(hi) on a stretch where p decreases; returns a point where p >= 0
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        if mid <= lo or mid >= hi or hi - lo <= 1e-7 * hi:
+            break
+        if _lower_cubic(f, f1, f2, m3, mid) > 0.0:
+            lo = mid
+        else:
+            hi = mid
+    return lo
+
+
+@jit
+def safe_step(f, f1, f2, m3, hmax):
+    """Largest tau in [0, hmax] with p > 0 on (0, tau), p the cubic lower bound above.
+
+    Returns 0 when p is not positive just after 0 (at the wall and moving or pushed in).
+    """
+    if m3 <= 0.0:
+        m3 = 1e-300
+    start = 0.0
+    disc = f2 * f2 + 2.0 * m3 * f1
+    if disc >= 0.0:
+        sd = math.sqrt(disc)
+        tm = (f2 - sd) / m3
+        tp = (f2 + sd) / m3
+        if tm > 0.0:
+            hi = min(tm, hmax)
+            if _lower_cubic(f, f1, f2, m3, hi) <= 0.0:
+                return _bisect_cubic(f, f1, f2, m3, 0.0, hi)
+            if hi == hmax:
+                return hmax
+            start = tp
+        elif tp > 0.0:
+            start = tp
+    if start >= hmax:
+        return hmax
+    if _lower_cubic(f, f1, f2, m3, hmax) > 0.0:
+        return hmax
+    if start == 0.0 and f <= 0.0:
+        return 0.0
+    return _bisect_cubic(f, f1, f2, m3, start, hmax)
+
+
+@jit
+def next_impact(sp, seg, s_end, hmax, max_steps):
+    """First impact of a flight segment before s_end.
+
+    Returns
+    -------
+    kind : int
+        NO_IMPACT (reached s_end), IMPACT, or STEP_LIMIT.
+    s : float
+        Time into the segment of the impact (or where the search stopped).
+    v : float
+        Velocity just before the impact (<= 0).
+    nsteps : int
+        Closed-form evaluations spent.
+    """
+    g = sp[G]
+    x, v, a, j, rh, xs = flight_state(sp, seg, 0.0)
+    x = seg[7]
+    v = seg[8]
+    s = 0.0
+    nsteps = 1
+    if x - g <= 0.0 and v == 0.0:
+        # at rest on the wall with a non-negative push: leave as tau^2 (a > 0) or tau^3 (a = 0)
+        # the caller has decided the mass leaves (force >= 0); a < 0 here is rounding
+        m3, m4 = derivative_bounds(sp, rh, min(hmax, s_end))
+        tau = safe_step(0.0, 0.0, max(a, 0.0), m3, min(hmax, s_end))
+        if j > 0.0:
+            tau = max(tau, min(2.0 * j / m4, hmax, s_end))
+        if tau <= 0.0:
+            return IMPACT, 0.0, 0.0, nsteps
+        s = tau
+        if s >= s_end:
+            return NO_IMPACT, s_end, v, nsteps
+        x, v, a, j, rh, xs = flight_state(sp, seg, s)
+        nsteps += 1
+    t0 = abs(seg[0])
+    while True:
+        f = x - g
+        tol = 8.0 * EPS * (xs + abs(g))
+        if f <= tol and (v < 0.0 or f < 0.0):
+            # converged onto the crossing from the left: polish with Newton
+            for _ in range(4):
+                if v >= 0.0:
+                    break
+                ds = -(x - g) / v
+                if abs(ds) > 1e-6 * hmax:
+                    break
+                s_new = min(max(s + ds, 0.0), s_end)
+                x, v, a, j, rh, xs = flight_state(sp, seg, s_new)
+                nsteps += 1
+                done = abs(s_new - s) <= 4.0 * EPS * (t0 + s)
+                s = s_new
+                if done:
+                    break
+            return IMPACT, s, min(v, 0.0), nsteps
+        h = min(hmax, s_end - s)
+        m3, m4 = derivative_bounds(sp, rh, s + h)
+        tau = safe_step(max(f, 0.0), v, a, m3, h)
+        if tau <= 4.0 * EPS * (t0 + s):
+            # touching the wall at rest (tangency within rounding): a contact, v ~ 0
+            return IMPACT, s, min(v, 0.0), nsteps
+        if tau >= s_end - s:
+            return NO_IMPACT, s_end, v, nsteps
+        s += tau
+        x, v, a, j, rh, xs = flight_state(sp, seg, s)
+        nsteps += 1
+        if nsteps > max_steps:
+            return STEP_LIMIT, s, v, nsteps
+
+
+@jit
+def impact_outcome(sp, t, vplus, rate, tail_tol):
+    """What follows an impact at time t with rebound velocity vplus = -r v(t-) >= 0.
+
+    Returns (mode, t_next): FLY from t (vplus > 0, or at rest with the force pushing
+    off), or STICK from t_next.  Once a rebound is so small that its hop lasts under
+    tail_tol time scales, the rest of the chatter (infinitely many hops, rebounds
+    vplus r^n) is summed, as in Budd & Dux (1994): each hop n satisfies
+    int_hop A dt = v_n + v_{n+1} / r, with A = (k g - cos(omega t)) / m the push into the
+    wall, so the sequence ends at t_inf with  int_t^t_inf A dt = 2 vplus / (1 - r).
+    The mass sticks there, provided the push has not turned outwards by then.
+    """
+    r = sp[R]
+    if vplus <= 0.0:
+        tr = release_time(sp, t)
+        if tr <= t:
+            return FLY, t
+        return STICK, t
+    m = sp[M]
+    a0 = -(wall_force(sp, t) - 2.0 * sp[C_] * vplus) / m
+    if r < 1.0 and a0 > 0.0 and 2.0 * vplus * rate <= tail_tol * a0:
+        target = 2.0 * vplus / (1.0 - r)
+        om = sp[OM]
+        kg = sp[K] * sp[G]
+        tau = target / a0
+        for _ in range(30):
+            # int_t^{t+tau} A = (kg tau - (sin(om(t+tau)) - sin(om t)) / om) / m
+            half = 0.5 * om * tau
+            dsin = 2.0 * math.cos(om * t + half) * math.sin(half)
+            gval = (kg * tau - dsin / om) / m - target
+            a_end = (kg - math.cos(om * (t + tau))) / m
+            if a_end <= 0.0:
+                return FLY, t
+            step = gval / a_end
+            tau -= step
+            if tau <= 0.0:
+                return FLY, t
+            if abs(step) <= 4.0 * EPS * (abs(t) + tau):
+                break
+        ts = t + tau
+        if release_time(sp, t) > ts and wall_force(sp, ts) <= 0.0:
+            return STICK, ts
+    return FLY, t
+
+
+@jit
+def phase_of(t, om):
+    """t mod T, T = 2 pi / omega, in [0, T)."""
+    period = 2.0 * math.pi / om
+    ph = t - period * math.floor(t / period)
+    if ph >= period:
+        ph -= period
+    return ph
+
+
+__all__ = ["safe_step", "next_impact", "impact_outcome", "phase_of", "OM"]

@@ -1,0 +1,209 @@
+"""Closed-form motion between impacts.
+
+Away from the wall Eq. (1) is linear, so x(t) = h(t) + x_p(t): a homogeneous part and a
+particular (steady forced) part.  Writing alpha = c/m, w0^2 = k/m and q = w0^2 - alpha^2,
+
+    h(s) = h0 e^{-alpha s} (C + alpha S) + hv0 e^{-alpha s} S,
+    C = cos(sqrt(q) s), S = sin(sqrt(q) s)/sqrt(q)            (q > 0, underdamped)
+    C = 1,              S = s                                   (q = 0, critical)
+    C = cosh(b s),      S = sinh(b s)/b,  b = sqrt(-q)          (q < 0, overdamped)
+
+sin(z)/sqrt(q) and sinh(z)/b stay accurate as q -> 0, so near-critical damping has no
+cancellation; for large b s the overdamped pair is evaluated from its two exponentials
+lam1 = -w0^2/(alpha + b) (the slow root, cancellation-free) and lam2 = -(alpha + b).
+
+The particular part is P cos(wt) + Q sin(wt) with P = (k - m w^2)/D, Q = 2 c w / D,
+D = (k - m w^2)^2 + (2 c w)^2; at exact resonance (c = 0, m w^2 = k) it is
+t sin(wt) / (2 m w).  Each flight segment stores the forcing relative to its own start
+(angle addition), so its phase and, at resonance, its secular term stay small.
+
+System constants live in a float64 array ``sp`` and a segment in ``seg``; the index
+names below are their layout.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ._jit import jit
+
+# sp layout
+M, C_, K, G, R, OM, ALPHA, Q_, SQ, W0SQ, LAM1, LAM2, PP, QQ, RES, FA, NSP = range(17)
+# seg layout
+T0, CPH, SPH, FC, FS, H0, HV0, X0, V0, NSEG = range(10)
+
+RESONANCE_RTOL = 16 * 2.220446049250313e-16
+
+
+def system_constants(m, c, k, g, r, omega):
+    """Pack the constants of Eq. (1) used by every kernel (Python side, once per run)."""
+    sp = np.zeros(NSP)
+    sp[M], sp[C_], sp[K], sp[G], sp[R], sp[OM] = m, c, k, g, r, omega
+    alpha = c / m
+    w0sq = k / m
+    q = (k * m - c * c) / (m * m)
+    sp[ALPHA], sp[W0SQ], sp[Q_] = alpha, w0sq, q
+    sp[SQ] = math.sqrt(abs(q))
+    if q < 0:
+        b = sp[SQ]
+        sp[LAM1] = -w0sq / (alpha + b)
+        sp[LAM2] = -(alpha + b)
+    detune = k - m * omega * omega
+    if c == 0.0 and abs(detune) <= RESONANCE_RTOL * max(k, m * omega * omega):
+        sp[RES] = 1.0
+        sp[FA] = 1.0 / (2.0 * m * omega)
+    else:
+        d = detune * detune + (2.0 * c * omega) ** 2
+        sp[PP] = detune / d
+        sp[QQ] = 2.0 * c * omega / d
+        sp[FA] = math.hypot(sp[PP], sp[QQ])
+    return sp
+
+
+@jit
+def start_segment(sp, t0, x0, v0):
+    """Segment of free flight from state (x0, v0) at time t0."""
+    seg = np.empty(NSEG)
+    om = sp[OM]
+    ph = om * t0
+    cph = math.cos(ph)
+    sph = math.sin(ph)
+    seg[T0] = t0
+    seg[CPH] = cph
+    seg[SPH] = sph
+    if sp[RES] != 0.0:
+        # x_p(s) = s sin(om s + ph) / (2 m om) = s (A cos om s + B sin om s)
+        seg[FC] = sph * sp[FA]
+        seg[FS] = cph * sp[FA]
+        xp0 = 0.0
+        vp0 = seg[FC]
+    else:
+        seg[FC] = sp[PP] * cph + sp[QQ] * sph
+        seg[FS] = sp[QQ] * cph - sp[PP] * sph
+        xp0 = seg[FC]
+        vp0 = om * seg[FS]
+    seg[H0] = x0 - xp0
+    seg[HV0] = v0 - vp0
+    seg[X0] = x0
+    seg[V0] = v0
+    return seg
+
+
+@jit
+def flight_state(sp, seg, s):
+    """State s time units into a segment.
+
+    Returns
+    -------
+    x, v, a, j : float
+        Displacement and its first three time derivatives at t0 + s.
+    rh : float
+        sqrt(h'^2 + w0^2 h^2) of the homogeneous part, a bound that never grows (energy).
+    xs : float
+        Size of the summed terms, for the rounding error of x.
+    """
+    alpha = sp[ALPHA]
+    q = sp[Q_]
+    sq = sp[SQ]
+    w0sq = sp[W0SQ]
+    if q > 0.0:
+        ex = math.exp(-alpha * s)
+        z = sq * s
+        eC = ex * math.cos(z)
+        eS = ex * math.sin(z) / sq
+    elif q == 0.0:
+        ex = math.exp(-alpha * s)
+        eC = ex
+        eS = ex * s
+    else:
+        z = sq * s
+        if z < 20.0:
+            ex = math.exp(-alpha * s)
+            eC = ex * math.cosh(z)
+            eS = ex * math.sinh(z) / sq
+        else:
+            e1 = math.exp(sp[LAM1] * s)
+            e2 = math.exp(sp[LAM2] * s)
+            eC = 0.5 * (e1 + e2)
+            eS = 0.5 * (e1 - e2) / sq
+    h0 = seg[H0]
+    hv0 = seg[HV0]
+    h = h0 * eC + (hv0 + alpha * h0) * eS
+    hd = -w0sq * h0 * eS + hv0 * (eC - alpha * eS)
+    hdd = -2.0 * alpha * hd - w0sq * h
+    hddd = -2.0 * alpha * hdd - w0sq * hd
+
+    om = sp[OM]
+    cw = math.cos(om * s)
+    sw = math.sin(om * s)
+    u = seg[FC] * cw + seg[FS] * sw
+    ud = om * (seg[FS] * cw - seg[FC] * sw)
+    if sp[RES] != 0.0:
+        xp = s * u
+        xpd = u + s * ud
+        xpdd = 2.0 * ud - s * om * om * u
+        xpddd = -3.0 * om * om * u - s * om * om * ud
+    else:
+        xp = u
+        xpd = ud
+        xpdd = -om * om * u
+        xpddd = -om * om * ud
+    rh = math.sqrt(hd * hd + w0sq * h * h)
+    return h + xp, hd + xpd, hdd + xpdd, hddd + xpddd, rh, abs(h) + abs(xp)
+
+
+@jit
+def derivative_bounds(sp, rh, s_max):
+    """Bounds on |x'''| and |x''''| valid from now until s_max into the segment.
+
+    The homogeneous energy h'^2 + w0^2 h^2 never grows, so |h'| <= rh and w0 |h| <= rh;
+    the higher derivatives follow from h'' = -2 alpha h' - w0^2 h.  The forcing part has
+    amplitude FA and gains a factor omega per derivative (plus the secular term at
+    resonance, bounded with s <= s_max).
+    """
+    alpha = sp[ALPHA]
+    w0sq = sp[W0SQ]
+    b1 = rh
+    b2 = rh * (2.0 * alpha + math.sqrt(w0sq))
+    b3 = 2.0 * alpha * b2 + w0sq * b1
+    b4 = 2.0 * alpha * b3 + w0sq * b2
+    om = sp[OM]
+    fa = sp[FA]
+    if sp[RES] != 0.0:
+        f3 = fa * (3.0 * om * om + s_max * om ** 3)
+        f4 = fa * (4.0 * om ** 3 + s_max * om ** 4)
+    else:
+        f3 = fa * om ** 3
+        f4 = fa * om ** 4
+    return b3 + f3, b4 + f4
+
+
+@jit
+def wall_force(sp, t):
+    """Net force on a mass resting on the wall (x = g, v = 0): cos(omega t) - k g."""
+    return math.cos(sp[OM] * t) - sp[K] * sp[G]
+
+
+@jit
+def release_time(sp, t):
+    """First time >= t at which a mass stuck to the wall leaves it: the net force
+    cos(omega t) - k g crosses zero upwards.  inf if the force never turns positive."""
+    kg = sp[K] * sp[G]
+    om = sp[OM]
+    if kg >= 1.0:
+        return math.inf
+    if kg < -1.0:
+        return t
+    if wall_force(sp, t) > 0.0:
+        return t
+    # zero crossing upwards at om t = 2 pi n - arccos(kg)
+    theta = 2.0 * math.pi - math.acos(kg)
+    n = math.floor((om * t - theta) / (2.0 * math.pi))
+    tr = (theta + 2.0 * math.pi * n) / om
+    while tr < t:
+        if t - tr <= 4e-16 * (abs(t) + 1.0 / om):
+            return t   # t sits on a crossing, up to rounding
+        n += 1.0
+        tr = (theta + 2.0 * math.pi * n) / om
+    return tr

@@ -1,0 +1,190 @@
+"""The impact oscillator's parameters (Lee, "Motion behavior of impact oscillator", Eq. 1).
+
+    m x'' + 2 c x' + k x = cos(omega t)      while x > g
+    x = g, x' < 0:  x'(t+) = -r x'(t-)
+
+Validation lives here and in :func:`check_run`, and runs once, in Python, before any kernel.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+PARAM_NAMES = ("m", "c", "k", "g", "r", "omega")
+METHODS = ("exact", "rk4", "rk45")
+
+
+@dataclass(frozen=True)
+class Field:
+    symbol: str
+    label: str
+    unit: str
+    doc: str
+
+
+FIELDS = {
+    "m": Field("m", "mass", "", "mass of the oscillator (> 0)"),
+    "c": Field("c", "damping", "", "damping coefficient; the equation carries 2c, so c = sqrt(k m) is critical (>= 0)"),
+    "k": Field("k", "stiffness", "", "spring stiffness (>= 0)"),
+    "g": Field("g", "endstop", "", "position of the rigid endstop; g > 0 preloads the spring, g < 0 is a gap"),
+    "r": Field("r", "restitution", "", "coefficient of restitution, 0 (plastic) to 1 (elastic)"),
+    "omega": Field("ω", "driving frequency", "rad/s", "angular frequency of the unit harmonic force (> 0)"),
+}
+
+
+def _as_float(name, value, problems):
+    if isinstance(value, bool) or value is None:
+        problems.append(f"{name}={value!r} is not a number")
+        return math.nan
+    try:
+        out = float(value)
+    except (TypeError, ValueError):
+        problems.append(f"{name}={value!r} is not a number")
+        return math.nan
+    if not math.isfinite(out):
+        problems.append(f"{name}={out!r} is not finite")
+    return out
+
+
+def _param_problems(values: dict) -> list[str]:
+    problems: list[str] = []
+    f = {n: _as_float(n, values[n], problems) for n in PARAM_NAMES}
+    if f["m"] <= 0:
+        problems.append(f"m={f['m']!r} must be > 0")
+    if f["c"] < 0:
+        problems.append(f"c={f['c']!r} must be >= 0")
+    if f["k"] < 0:
+        problems.append(f"k={f['k']!r} must be >= 0")
+    if not (0.0 <= f["r"] <= 1.0) and math.isfinite(f["r"]):
+        problems.append(f"r={f['r']!r} must lie in [0, 1]")
+    if f["omega"] <= 0:
+        problems.append(f"omega={f['omega']!r} must be > 0")
+    return problems
+
+
+@dataclass(frozen=True)
+class Params:
+    """Physical parameters; frozen, hashable, validated on construction.
+
+    Defaults are the paper's: m = 1, c = 0.05, k = 1, g = 0, r = 0.8, omega = 2.
+    """
+
+    m: float = 1.0
+    c: float = 0.05
+    k: float = 1.0
+    g: float = 0.0
+    r: float = 0.8
+    omega: float = 2.0
+
+    def __post_init__(self):
+        values = {n: getattr(self, n) for n in PARAM_NAMES}
+        problems = _param_problems(values)
+        if problems:
+            raise ValueError("invalid parameters: " + "; ".join(problems))
+        for n in PARAM_NAMES:
+            object.__setattr__(self, n, float(values[n]))
+
+    @property
+    def T(self) -> float:
+        """Forcing period 2 pi / omega."""
+        return 2.0 * math.pi / self.omega
+
+    @property
+    def omega_n(self) -> float:
+        """Natural frequency sqrt(k / m) of the free, undamped oscillator."""
+        return math.sqrt(self.k / self.m)
+
+    def replace(self, **changes) -> "Params":
+        unknown = sorted(set(changes) - set(PARAM_NAMES))
+        if unknown:
+            raise ValueError(f"unknown parameter name(s): {', '.join(map(repr, unknown))}; "
+                             f"expected one of {', '.join(PARAM_NAMES)}")
+        return dataclasses.replace(self, **changes)
+
+    def as_array(self) -> np.ndarray:
+        return np.array([getattr(self, n) for n in PARAM_NAMES], dtype=np.float64)
+
+    def rate(self) -> float:
+        """Fastest rate of the linear flow plus forcing, 1/s (sets step and tolerance scales)."""
+        a = self.c / self.m
+        lam = a + math.sqrt(abs(a * a - self.k / self.m)) if a * a > self.k / self.m else math.sqrt(self.k / self.m)
+        return max(lam, self.omega, a)
+
+
+@dataclass(frozen=True)
+class RunLimits:
+    """Work ceilings of one simulation; hitting one stops the run with partial results."""
+
+    max_impacts: int = 2_000_000
+    max_steps: int = 50_000_000
+    max_samples: int = 5_000_000     # Poincare + dense samples held in memory
+
+
+def rk4_stability_limit(p: Params) -> float:
+    """Largest stable RK4 step for the linear flow: |h lambda| <= 2.78 on the real axis,
+    2.83 on the imaginary axis; 2.78 is used for every direction (conservative)."""
+    a = p.c / p.m
+    w0sq = p.k / p.m
+    if a * a > w0sq:
+        lam = a + math.sqrt(a * a - w0sq)
+    else:
+        lam = math.sqrt(w0sq)
+    return math.inf if lam == 0 else 2.78 / lam
+
+
+def check_run(p: Params, *, t_end, t_record, x0, v0, phase, method, dt, rtol, atol,
+              dense, limits: RunLimits) -> tuple:
+    """Validate a run's settings; return them as floats. One ValueError names every bad field."""
+    problems: list[str] = []
+    if not isinstance(p, Params):
+        raise TypeError(f"p must be impactlib.Params, got {type(p).__name__}")
+    if method not in METHODS:
+        problems.append(f"method={method!r} is unknown; expected one of {', '.join(METHODS)}")
+    t_end = _as_float("t_end", t_end, problems)
+    t_record = _as_float("t_record", t_record, problems)
+    x0 = max(0.0, p.g) if x0 is None else _as_float("x0", x0, problems)
+    v0 = _as_float("v0", v0, problems)
+    phase = _as_float("phase", phase, problems)
+    if math.isfinite(t_end) and t_end <= 0:
+        problems.append(f"t_end={t_end!r} must be > 0")
+    if math.isfinite(t_record) and math.isfinite(t_end) and not (0.0 <= t_record <= t_end):
+        problems.append(f"t_record={t_record!r} must lie in [0, t_end={t_end!r}]")
+    if math.isfinite(x0) and x0 < p.g:
+        problems.append(f"x0={x0!r} is behind the endstop g={p.g!r} (need x0 >= g)")
+    if math.isfinite(phase) and not (0.0 <= phase <= p.T):
+        problems.append(f"phase={phase!r} must lie in [0, T={p.T!r}] (time units)")
+    if isinstance(dense, bool) or not isinstance(dense, (int, np.integer)) or dense < 0:
+        problems.append(f"dense={dense!r} must be a whole number >= 0")
+    if method == "rk4":
+        if dt is None:
+            problems.append("dt is required for method='rk4'")
+        else:
+            dt = _as_float("dt", dt, problems)
+            if math.isfinite(dt):
+                lim = rk4_stability_limit(p)
+                if dt <= 0:
+                    problems.append(f"dt={dt!r} must be > 0")
+                elif dt > lim:
+                    problems.append(f"dt={dt!r} exceeds the RK4 stability limit {lim:.4g} for these "
+                                    f"parameters (fastest rate {2.78 / lim:.4g} 1/s)")
+    if method == "rk45":
+        rtol = _as_float("rtol", rtol, problems)
+        atol = _as_float("atol", atol, problems)
+        if math.isfinite(rtol) and not (1e-14 <= rtol < 1):
+            problems.append(f"rtol={rtol!r} must lie in [1e-14, 1)")
+        if math.isfinite(atol) and not (0 < atol < 1):
+            problems.append(f"atol={atol!r} must lie in (0, 1)")
+    if not problems:
+        n_sec = (t_end - t_record) / p.T + 2
+        n_samples = n_sec + (dense if isinstance(dense, (int, np.integer)) else 0)
+        if n_samples > limits.max_samples:
+            problems.append(
+                f"the window [t_record, t_end] = [{t_record!r}, {t_end!r}] holds {n_sec:.3g} forcing "
+                f"periods at omega={p.omega!r}; with dense={dense} that is over the limit of "
+                f"{limits.max_samples} samples")
+    if problems:
+        raise ValueError("invalid run: " + "; ".join(problems))
+    return t_end, t_record, x0, v0, phase, dt, rtol, atol

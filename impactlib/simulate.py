@@ -1,0 +1,314 @@
+"""simulate(): one run of the impact oscillator, by the closed form or an integrator."""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from ._jit import jit
+from .events import FLY, IMPACT, NO_IMPACT, STEP_LIMIT, STICK, impact_outcome, next_impact
+from .flight import G, R, flight_state, release_time, start_segment, system_constants, wall_force
+from .integrators import advance_rk4, advance_rk45
+from .model import Params, RunLimits, check_run
+
+METHOD_IDS = {"exact": 0, "rk4": 1, "rk45": 2}
+TAIL_TOL = 1e-6          # a chatter is summed once one hop lasts under this many time scales
+
+# run status codes (Solution.status)
+OK, IMPACT_LIMIT, STEP_LIMIT_HIT, OUTPUT_FULL = 0, 1, 2, 3
+MESSAGES = {
+    OK: "reached t_end",
+    IMPACT_LIMIT: "stopped at the impact limit (max_impacts); results up to that time",
+    STEP_LIMIT_HIT: "stopped at the step limit (max_steps); results up to that time",
+    OUTPUT_FULL: "more impacts in the record window than the output holds; the rest were not kept",
+}
+
+
+@jit
+def _sample_segment(sp, seg, t_hi, ts, xs, vs, i):
+    while i < ts.shape[0] and ts[i] <= t_hi:
+        x, v, a, j, rh, sc = flight_state(sp, seg, ts[i] - seg[0])
+        xs[i] = x
+        vs[i] = v
+        i += 1
+    return i
+
+
+@jit
+def _sample_rest(g, t_hi, ts, xs, vs, i):
+    while i < ts.shape[0] and ts[i] <= t_hi:
+        xs[i] = g
+        vs[i] = 0.0
+        i += 1
+    return i
+
+
+@jit
+def run_kernel(sp, method, t, x, v, t_end, t_record, hmax, rate, dt, rtol, atol,
+               imp_t, imp_v, stick, pc_t, pc_x, pc_v, d_t, d_x, d_v, max_impacts, max_steps):
+    """Drive one run from state (t, x, v) to t_end.
+
+    Output arrays are filled in place: impacts inside [t_record, t_end] (as many as
+    imp_t holds; more are counted, not kept), sticking intervals clipped to the window,
+    and the state at the prescribed sample times pc_t and d_t (sorted, inside the window).
+
+    Returns (status, n_recorded, n_impacts_total, n_stick, t, x, v, stuck, nsteps).
+    """
+    g = sp[G]
+    r = sp[R]
+    cap = imp_t.shape[0]
+    n_rec = 0
+    n_tot = 0
+    n_stick = 0
+    nsteps = 0
+    ip = 0
+    idn = 0
+    status = 0
+    stuck = False
+    h45 = min(0.01 / rate, hmax)
+    # the initial state may be on the wall
+    if x <= g:
+        x = g
+        if v < 0.0:
+            if t >= t_record:
+                if n_rec < cap:
+                    imp_t[n_rec] = t
+                    imp_v[n_rec] = v
+                n_rec += 1
+            n_tot += 1
+            v = -r * v
+        if v <= 0.0:
+            v = 0.0
+        mode, tn = impact_outcome(sp, t, v, rate, TAIL_TOL)
+        if mode == STICK:
+            ip = _sample_rest(g, tn, pc_t, pc_x, pc_v, ip)
+            idn = _sample_rest(g, tn, d_t, d_x, d_v, idn)
+            t = tn
+            v = 0.0
+            stuck = True
+    while t < t_end:
+        if stuck:
+            tr = release_time(sp, t)
+            te = min(tr, t_end)
+            ip = _sample_rest(g, te, pc_t, pc_x, pc_v, ip)
+            idn = _sample_rest(g, te, d_t, d_x, d_v, idn)
+            if te > t_record and n_stick < stick.shape[0]:
+                stick[n_stick, 0] = max(t, t_record)
+                stick[n_stick, 1] = te
+                n_stick += 1
+            if tr >= t_end:
+                t = t_end
+                break
+            t = tr
+            x = g
+            v = 0.0
+            stuck = False
+            continue
+        if method == 0:
+            seg = start_segment(sp, t, x, v)
+            kind, s, vh, ns = next_impact(sp, seg, t_end - t, hmax, max_steps - nsteps)
+            nsteps += ns
+            th = t + s
+            ip = _sample_segment(sp, seg, th, pc_t, pc_x, pc_v, ip)
+            idn = _sample_segment(sp, seg, th, d_t, d_x, d_v, idn)
+            if kind != IMPACT:
+                xe, ve, ae, je, rhe, sce = flight_state(sp, seg, s)
+                t, x, v = th, xe, ve
+                if kind == STEP_LIMIT:
+                    status = 2
+                break
+            started_at_rest = s == 0.0 and x <= g and v == 0.0
+        elif method == 1:
+            kind, th, xh, vh, ns, ip, idn = advance_rk4(
+                sp, t, x, v, t_end, dt, pc_t, pc_x, pc_v, ip, d_t, d_x, d_v, idn, max_steps - nsteps)
+            nsteps += ns
+            if kind != IMPACT:
+                t, x, v = th, xh, vh
+                if kind == STEP_LIMIT:
+                    status = 2
+                    if t < t_end:
+                        break
+                break
+            started_at_rest = False
+        else:
+            kind, th, xh, vh, h45, ns, ip, idn = advance_rk45(
+                sp, t, x, v, h45, t_end, rtol, atol, pc_t, pc_x, pc_v, ip, d_t, d_x, d_v, idn,
+                max_steps - nsteps)
+            nsteps += ns
+            if kind != IMPACT:
+                t, x, v = th, xh, vh
+                if kind == STEP_LIMIT:
+                    status = 2
+                break
+            started_at_rest = False
+        # impact at th with velocity vh <= 0
+        t = th
+        x = g
+        if not (started_at_rest and vh == 0.0):
+            n_tot += 1
+            if t >= t_record:
+                if n_rec < cap:
+                    imp_t[n_rec] = t
+                    imp_v[n_rec] = vh
+                n_rec += 1
+        vplus = -r * vh
+        if vplus <= 0.0:
+            vplus = 0.0
+        mode, tn = impact_outcome(sp, t, vplus, rate, TAIL_TOL)
+        if mode == STICK:
+            ip = _sample_rest(g, tn, pc_t, pc_x, pc_v, ip)
+            idn = _sample_rest(g, tn, d_t, d_x, d_v, idn)
+            t = tn
+            v = 0.0
+            stuck = True
+        else:
+            v = vplus
+        if n_tot >= max_impacts:
+            status = 1
+            break
+        if nsteps >= max_steps:
+            status = 2
+            break
+    if status == 0 and n_rec > cap:
+        status = 3
+    return status, n_rec, n_tot, n_stick, t, x, v, stuck, nsteps
+
+
+# ---------------------------------------------------------------- Python layer
+
+
+@dataclass(frozen=True)
+class Impacts:
+    t: np.ndarray
+    phase: np.ndarray
+    v: np.ndarray          # velocity just before impact, <= 0
+
+    def __len__(self):
+        return self.t.shape[0]
+
+
+@dataclass(frozen=True)
+class Samples:
+    t: np.ndarray
+    x: np.ndarray
+    v: np.ndarray
+
+    def __len__(self):
+        return self.t.shape[0]
+
+
+@dataclass(frozen=True)
+class Solution:
+    """Result of :func:`simulate` (fields read like scipy's OdeResult)."""
+
+    params: Params
+    method: str
+    t_end: float
+    t_record: float
+    phase: float
+    impacts: Impacts
+    poincare: Samples
+    sticking: np.ndarray
+    dense: Samples | None
+    status: int
+    message: str
+    final: tuple          # (t, x, v, stuck) where the run stopped
+    n_impacts: int        # all impacts, including the transient
+    nsteps: int
+    elapsed: float        # seconds in the kernel
+
+    @property
+    def success(self) -> bool:
+        return self.status == OK
+
+
+def section_times(t_record, t_end, phase, period):
+    """Times phase + n T inside [t_record, t_end]."""
+    n0 = math.ceil((t_record - phase) / period - 1e-12)
+    n1 = math.floor((t_end - phase) / period + 1e-12)
+    ts = phase + period * np.arange(n0, n1 + 1, dtype=np.float64)
+    return ts[(ts >= t_record - 1e-9 * period) & (ts <= t_end + 1e-9 * period)]
+
+
+def run_constants(p: Params):
+    sp = system_constants(p.m, p.c, p.k, p.g, p.r, p.omega)
+    rate = p.rate()
+    hmax = 0.25 * min(p.T, 2 * math.pi / rate)
+    return sp, rate, hmax
+
+
+def simulate(p: Params, t_end: float = 500.0, x0: float | None = None, v0: float = 0.0,
+             t_record: float = 250.0, phase: float = 0.0, method: str = "exact", *,
+             dense: int = 0, dt: float | None = None, rtol: float = 1e-6, atol: float = 1e-9,
+             t0: float = 0.0, max_impacts: int | None = None, max_steps: int | None = None,
+             limits: RunLimits = RunLimits()) -> Solution:
+    """Simulate Eq. (1) from (x0, v0) at t0 = 0 to t_end, keeping what lies in [t_record, t_end].
+
+    Parameters
+    ----------
+    p : Params
+    t_end, t_record : float
+        End of the run and start of the record window (the paper: 500 and 250).
+    x0, v0 : float
+        Initial state; x0 defaults to max(0, g).
+    phase : float
+        Poincare section, in time units in [0, T]: samples at t = phase + n T.
+    method : {"exact", "rk4", "rk45"}
+        Closed form with guaranteed impact search, fixed-step RK4 (needs ``dt``), or
+        adaptive Dormand-Prince (``rtol``, ``atol``).
+    dense : int
+        Number of evenly spaced samples of (x, v) on [t_record, t_end]; 0 for none.
+    max_impacts, max_steps : int
+        Work ceilings; reaching one ends the run with ``status`` > 0 and partial results.
+
+    Returns
+    -------
+    Solution
+    """
+    t_end, t_record, x0, v0, phase, dt, rtol, atol = check_run(
+        p, t_end=t_end, t_record=t_record, x0=x0, v0=v0, phase=phase, method=method, dt=dt,
+        rtol=rtol, atol=atol, dense=dense, limits=limits)
+    max_impacts = limits.max_impacts if max_impacts is None else int(max_impacts)
+    max_steps = limits.max_steps if max_steps is None else int(max_steps)
+    sp, rate, hmax = run_constants(p)
+    pc_t = section_times(t_record, t_end, phase, p.T)
+    d_t = np.linspace(t_record, t_end, dense) if dense else np.empty(0)
+    n_periods = int((t_end - t_record) / p.T) + 2
+    cap = min(max(1024, 8 * n_periods), max_impacts)
+    while True:
+        imp_t = np.empty(cap)
+        imp_v = np.empty(cap)
+        stick = np.empty((n_periods + 2, 2))
+        pc_x = np.full(pc_t.shape, np.nan)
+        pc_v = np.full(pc_t.shape, np.nan)
+        d_x = np.full(d_t.shape, np.nan)
+        d_v = np.full(d_t.shape, np.nan)
+        tic = time.perf_counter()
+        status, n_rec, n_tot, n_stick, tf, xf, vf, stuck, nsteps = run_kernel(
+            sp, METHOD_IDS[method], float(t0), x0, v0, t_end, t_record, hmax, rate,
+            0.0 if dt is None else dt, rtol, atol, imp_t, imp_v, stick, pc_t, pc_x, pc_v,
+            d_t, d_x, d_v, max_impacts, max_steps)
+        elapsed = time.perf_counter() - tic
+        if status == OUTPUT_FULL and cap < max_impacts:
+            cap = min(max_impacts, max(2 * cap, n_rec))
+            continue
+        break
+    n_keep = min(n_rec, cap)
+    it = imp_t[:n_keep].copy()
+    impacts = Impacts(it, np.mod(it, p.T), imp_v[:n_keep].copy())
+    keep_pc = ~np.isnan(pc_x)
+    poincare = Samples(pc_t[keep_pc], pc_x[keep_pc], pc_v[keep_pc])
+    dense_out = None
+    if dense:
+        keep_d = ~np.isnan(d_x)
+        dense_out = Samples(d_t[keep_d], d_x[keep_d], d_v[keep_d])
+    message = MESSAGES[status]
+    if status in (IMPACT_LIMIT, STEP_LIMIT_HIT):
+        message += f" (stopped at t = {tf:.6g})"
+    return Solution(params=p, method=method, t_end=t_end, t_record=t_record, phase=phase,
+                    impacts=impacts, poincare=poincare, sticking=stick[:n_stick].copy(),
+                    dense=dense_out, status=status, message=message,
+                    final=(tf, xf, vf, bool(stuck)), n_impacts=n_tot, nsteps=nsteps,
+                    elapsed=elapsed)
