@@ -104,11 +104,11 @@ class Explorer(pn.viewable.Viewer):
             lo, hi = par.softbounds
             return pn.widgets.EditableFloatSlider.from_param(
                 par, start=lo, end=hi, step=par.step, format=fmt,
-                sizing_mode="stretch_width", name=par.label)
+                sizing_mode="stretch_width", label=par.label)
 
         def number(name, cls=pn.widgets.FloatInput, **kw):
             par = p[name]
-            return cls.from_param(par, description=par.doc, name=par.label,
+            return cls.from_param(par, description=par.doc, label=par.label,
                                   sizing_mode="stretch_width", **kw)
 
         w = self.widgets = {
@@ -117,7 +117,7 @@ class Explorer(pn.viewable.Viewer):
             "psi": slider("psi"),
             "t_end": number("t_end"), "t_record": number("t_record"),
             "x0": number("x0"), "v0": number("v0"),
-            "method": pn.widgets.Select.from_param(p.method, name=p.method.label,
+            "method": pn.widgets.Select.from_param(p.method, label=p.method.label,
                                                    description=p.method.doc,
                                                    sizing_mode="stretch_width"),
             "dt": number("dt", format="0.[000000]"),
@@ -137,7 +137,8 @@ class Explorer(pn.viewable.Viewer):
             css_classes=["ie-caption"], sizing_mode="stretch_width")
         self.scene_buttons = []
         for sc in SCENES:
-            b = pn.widgets.Button(name=sc.label, button_type="light", margin=(2, 3),
+            b = pn.widgets.Button(label=sc.label, color="primary", variant="outline",
+                                  margin=(2, 3),
                                   css_classes=[f"ie-scene-{sc.key}"],
                                   description=sc.caption.split("**")[1])
             b.on_click(lambda event, sc=sc: self.load_scene(sc.key))
@@ -148,18 +149,18 @@ class Explorer(pn.viewable.Viewer):
                                            sizing_mode="stretch_width")
         self.downloads = [
             pn.widgets.FileDownload(callback=self._impacts_csv, filename="impacts.csv",
-                                    label="Impacts (CSV)", button_type="default",
+                                    label="Impacts (CSV)", color="default",
                                     sizing_mode="stretch_width"),
             pn.widgets.FileDownload(callback=self._poincare_csv, filename="poincare.csv",
-                                    label="Poincaré points (CSV)", button_type="default",
+                                    label="Poincaré points (CSV)", color="default",
                                     sizing_mode="stretch_width"),
             pn.widgets.FileDownload(callback=self._bifurcation_csv,
                                     filename="bifurcation.csv",
                                     label="Bifurcation diagram (CSV)",
-                                    button_type="default", sizing_mode="stretch_width"),
+                                    color="default", sizing_mode="stretch_width"),
         ]
         self.accuracy_button = pn.widgets.Button(
-            name="Compare methods", button_type="primary", sizing_mode="stretch_width",
+            label="Compare methods", color="primary", sizing_mode="stretch_width",
             description="Run exact, rk4 and rk45 on the current scene and compare their "
                         "impacts and run times (not recomputed on slider moves).")
         self.accuracy_button.on_click(self._on_accuracy)

@@ -4,7 +4,7 @@ from __future__ import annotations
 from bokeh.models import ColumnDataSource, Range1d
 
 from ..compute import SceneData
-from ._figure import IMPACT, make_figure
+from ._figure import IMPACT, make_figure, padded, set_range
 
 
 class ImpactMapView:
@@ -12,7 +12,7 @@ class ImpactMapView:
         self.source = ColumnDataSource({"phase": [], "v": []})
         self.figure = make_figure("impact_map_figure", "Impact map",
                                   "impact phase τ_I mod T (s)", "impact velocity ẋ(τ_I−)",
-                                  x_range=Range1d(0.0, 3.14159))
+                                  x_range=Range1d(0.0, 3.14159), y_range=Range1d(-1.0, 0.0))
         self.figure.scatter("phase", "v", source=self.source, size=5, color=IMPACT,
                             alpha=0.8, name="impact_map")
 
@@ -20,6 +20,7 @@ class ImpactMapView:
         imp = scene.impacts
         self.source.data = {"phase": imp["phase"], "v": imp["v"]}
         T = scene.run.params.T
-        self.figure.x_range.update(start=0.0, end=T)
+        set_range(self.figure.x_range, 0.0, T)
+        set_range(self.figure.y_range, *padded(imp["v"], include=(0.0,)))
         n = len(imp["t"])
         self.figure.title.text = f"Impact map — {n} impacts, T = {T:.4g} s"

@@ -1,0 +1,21 @@
+import pytest
+
+from app.explorer import Explorer
+
+#: A small diagram keeps the app tests quick; the browser tests use the real default.
+SMALL = {"bif_n": "40", "bif_min": "0.5", "bif_max": "4"}
+
+
+@pytest.fixture
+def make_explorer():
+    made = []
+
+    def make(**args):
+        e = Explorer(args={**SMALL, **args})
+        made.append(e)
+        assert e.runner.done.wait(60), "diagram did not finish"
+        return e
+
+    yield make
+    for e in made:
+        e.runner.cancel()

@@ -1,0 +1,86 @@
+"""State logic without a browser: URL parsing, validation, round trips."""
+import math
+
+import pytest
+from hypothesis import given, settings as hsettings, strategies as st
+
+from app import state
+
+
+def test_defaults_are_the_papers():
+    run = state.validate(state.defaults())
+    p = run.params
+    assert (p.m, p.c, p.k, p.g, p.r, p.omega) == (1.0, 0.05, 1.0, 0.0, 0.8, 2.0)
+    assert (run.t_end, run.t_record, run.method) == (500.0, 250.0, "exact")
+
+
+def test_query_restores_every_field():
+    args = {"omega": "2.8", "r": "0.6", "c": "0.1", "g": "-0.25", "m": "2", "k": "3",
+            "psi": repr(math.pi / (4 * 2.8)), "t_end": "300", "t_record": "100",
+            "x0": "0.5", "v0": "-1", "method": "rk45", "rtol": "1e-8", "atol": "1e-10",
+            "dt": "0.002", "bif_min": "0.5", "bif_max": "4", "bif_n": "120"}
+    values, errors = state.parse_query(args)
+    assert errors == []
+    run = state.validate(values)
+    assert run.params.omega == 2.8 and run.params.r == 0.6 and run.params.g == -0.25
+    assert run.psi_frac == pytest.approx(1 / 8, rel=1e-12)   # pi/(4 omega) = T/8
+    assert run.psi == pytest.approx(math.pi / (4 * 2.8), rel=1e-12)
+    assert (run.x0, run.v0, run.method, run.rtol, run.bif_n) == (0.5, -1.0, "rk45", 1e-8, 120)
+
+
+def test_bytes_and_lists_as_tornado_gives_them():
+    values, errors = state.parse_query({"omega": [b"1.2"], "method": [b"rk4"]})
+    assert errors == [] and values["omega"] == 1.2 and values["method"] == "rk4"
+
+
+@pytest.mark.parametrize("name,text", [
+    ("omega", "abc"), ("omega", "nan"), ("r", "inf"), ("c", "-inf"), ("m", ""),
+    ("k", "1e999"), ("method", "euler"), ("bif_n", "12.5"), ("psi", "<script>"),
+])
+def test_garbage_is_reported_by_name_and_replaced_by_default(name, text):
+    values, errors = state.initial_settings({name: text})
+    assert len(errors) == 1 and errors[0].startswith(name)
+    assert values[name] == state.defaults()[name]
+    assert "<script>" not in errors[0]           # escaped before it reaches the page
+
+
+@pytest.mark.parametrize("args,field", [
+    ({"m": "-1"}, "m"), ({"m": "0"}, "m"), ({"k": "-2"}, "k"), ({"c": "-0.1"}, "c"),
+    ({"r": "1.5"}, "r"), ({"r": "-0.1"}, "r"), ({"omega": "0"}, "omega"),
+    ({"omega": "1e9"}, "omega"), ({"t_end": "1e12"}, "t_end"),
+    ({"t_record": "600"}, "t_record"), ({"psi": "99"}, "psi"),
+    ({"dt": "0"}, "dt"), ({"bif_n": "1"}, "bif_n"), ({"x0": "-1", "g": "0"}, "x0"),
+])
+def test_physically_invalid_link_falls_back_to_defaults(args, field):
+    values, errors = state.initial_settings(args)
+    assert errors and field in " ".join(errors)
+    state.validate(values)                       # what is used is valid
+
+
+def test_validate_names_every_bad_field_at_once():
+    values = {**state.defaults(), "m": -1.0, "r": 2.0, "t_end": math.nan, "method": "x"}
+    with pytest.raises(ValueError) as exc:
+        state.validate(values)
+    text = str(exc.value)
+    for field in ("m=", "r=", "t_end", "method"):
+        assert field in text
+
+
+def test_empty_x0_means_at_the_wall():
+    values, errors = state.parse_query({"x0": ""})
+    assert errors == [] and state.validate(values).x0 is None
+
+
+@hsettings(max_examples=60, deadline=None)
+@given(omega=st.floats(0.01, 50), r=st.floats(0, 1), c=st.floats(0, 2),
+       g=st.floats(-5, 5), m=st.floats(1e-3, 1e3), k=st.floats(0, 1e3),
+       psi=st.floats(0, 1), t_end=st.floats(1, 5000))
+def test_url_round_trip(omega, r, c, g, m, k, psi, t_end):
+    values = {**state.defaults(), "omega": omega, "r": r, "c": c, "g": g, "m": m, "k": k,
+              "psi": psi, "t_end": t_end, "t_record": t_end / 2}
+    run = state.validate(values)
+    back, errors = state.parse_query(state.to_query(run))
+    assert errors == []
+    run2 = state.validate(back)
+    assert run2.params == run.params and run2.t_end == run.t_end
+    assert run2.psi_frac == pytest.approx(run.psi_frac, abs=1e-12)
