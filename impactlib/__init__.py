@@ -2,8 +2,11 @@
 
     m x'' + 2 c x' + k x = cos(omega t)   for x > g;   x'(t+) = -r x'(t-) at x = g
 """
+from .classify import Motion, classify
 from .model import FIELDS, METHODS, PARAM_NAMES, Params, RunLimits, rk4_stability_limit
 from .simulate import Impacts, Samples, Solution, simulate
+from .sweeps import Bifurcation, RegimeMap, bifurcation, iter_bifurcation, regime_map
 
 __all__ = ["FIELDS", "METHODS", "PARAM_NAMES", "Params", "RunLimits", "rk4_stability_limit",
-           "Impacts", "Samples", "Solution", "simulate"]
+           "Impacts", "Samples", "Solution", "simulate", "Motion", "classify",
+           "Bifurcation", "RegimeMap", "bifurcation", "iter_bifurcation", "regime_map"]

@@ -54,7 +54,8 @@ def run_kernel(sp, method, t, x, v, t_end, t_record, hmax, rate, dt, rtol, atol,
     imp_t holds; more are counted, not kept), sticking intervals clipped to the window,
     and the state at the prescribed sample times pc_t and d_t (sorted, inside the window).
 
-    Returns (status, n_recorded, n_impacts_total, n_stick, t, x, v, stuck, nsteps).
+    Returns (status, n_recorded, n_impacts_total, n_stick, n_tail, t, x, v, stuck, nsteps),
+    n_tail counting the chatter sequences summed to their accumulation point in the window.
     """
     g = sp[G]
     r = sp[R]
@@ -62,6 +63,7 @@ def run_kernel(sp, method, t, x, v, t_end, t_record, hmax, rate, dt, rtol, atol,
     n_rec = 0
     n_tot = 0
     n_stick = 0
+    n_tail = 0
     nsteps = 0
     ip = 0
     idn = 0
@@ -128,8 +130,6 @@ def run_kernel(sp, method, t, x, v, t_end, t_record, hmax, rate, dt, rtol, atol,
                 t, x, v = th, xh, vh
                 if kind == STEP_LIMIT:
                     status = 2
-                    if t < t_end:
-                        break
                 break
             started_at_rest = False
         else:
@@ -158,6 +158,8 @@ def run_kernel(sp, method, t, x, v, t_end, t_record, hmax, rate, dt, rtol, atol,
             vplus = 0.0
         mode, tn = impact_outcome(sp, t, vplus, rate, TAIL_TOL)
         if mode == STICK:
+            if tn > t and t >= t_record:
+                n_tail += 1
             ip = _sample_rest(g, tn, pc_t, pc_x, pc_v, ip)
             idn = _sample_rest(g, tn, d_t, d_x, d_v, idn)
             t = tn
@@ -173,7 +175,7 @@ def run_kernel(sp, method, t, x, v, t_end, t_record, hmax, rate, dt, rtol, atol,
             break
     if status == 0 and n_rec > cap:
         status = 3
-    return status, n_rec, n_tot, n_stick, t, x, v, stuck, nsteps
+    return status, n_rec, n_tot, n_stick, n_tail, t, x, v, stuck, nsteps
 
 
 # ---------------------------------------------------------------- Python layer
@@ -216,6 +218,7 @@ class Solution:
     message: str
     final: tuple          # (t, x, v, stuck) where the run stopped
     n_impacts: int        # all impacts, including the transient
+    n_chatter: int        # chatter sequences in the window summed to their accumulation point
     nsteps: int
     elapsed: float        # seconds in the kernel
 
@@ -286,7 +289,7 @@ def simulate(p: Params, t_end: float = 500.0, x0: float | None = None, v0: float
         d_x = np.full(d_t.shape, np.nan)
         d_v = np.full(d_t.shape, np.nan)
         tic = time.perf_counter()
-        status, n_rec, n_tot, n_stick, tf, xf, vf, stuck, nsteps = run_kernel(
+        status, n_rec, n_tot, n_stick, n_tail, tf, xf, vf, stuck, nsteps = run_kernel(
             sp, METHOD_IDS[method], float(t0), x0, v0, t_end, t_record, hmax, rate,
             0.0 if dt is None else dt, rtol, atol, imp_t, imp_v, stick, pc_t, pc_x, pc_v,
             d_t, d_x, d_v, max_impacts, max_steps)
@@ -310,5 +313,6 @@ def simulate(p: Params, t_end: float = 500.0, x0: float | None = None, v0: float
     return Solution(params=p, method=method, t_end=t_end, t_record=t_record, phase=phase,
                     impacts=impacts, poincare=poincare, sticking=stick[:n_stick].copy(),
                     dense=dense_out, status=status, message=message,
-                    final=(tf, xf, vf, bool(stuck)), n_impacts=n_tot, nsteps=nsteps,
+                    final=(tf, xf, vf, bool(stuck)), n_impacts=n_tot, n_chatter=n_tail,
+                    nsteps=nsteps,
                     elapsed=elapsed)

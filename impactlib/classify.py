@@ -1,0 +1,99 @@
+"""The paper's (m, n) classification: m-impact period-n motion.
+
+n is the smallest number of forcing periods after which the Poincare points repeat
+(to a tolerance relative to the orbit's size), m the number of impacts in those n
+periods.  A chatter summed to its accumulation point counts as infinitely many impacts
+(complete chattering); no repeat within ``max_period`` periods means period infinity.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ._jit import jit
+
+PERIOD_RTOL = 1e-4    # transients of the paper's damping (c = 0.05) decay to ~1e-5 in 250 s
+MAX_PERIOD = 32
+
+
+@jit
+def motion_class(pc_x, pc_v, imp_t, t_end, period_T, n_chatter, rtol, max_period):
+    """(m, n) from Poincare points and impact times in the window; -1 stands for infinity."""
+    npts = pc_x.shape[0]
+    if npts < 4:
+        return -2, -2          # window too short to tell
+    scale = 1e-300
+    for i in range(npts):
+        scale = max(scale, abs(pc_x[i]), abs(pc_v[i]))
+    tol = rtol * scale
+    half = npts // 2
+    n = -1
+    for cand in range(1, max_period + 1):
+        if npts - half < 2 * cand:
+            break
+        ok = True
+        for i in range(half, npts - cand):
+            if abs(pc_x[i + cand] - pc_x[i]) > tol or abs(pc_v[i + cand] - pc_v[i]) > tol:
+                ok = False
+                break
+        if ok:
+            n = cand
+            break
+    if n < 0:
+        return (-1 if imp_t.shape[0] > 0 else 0), -1
+    if n_chatter > 0:
+        return -1, n
+    t_from = t_end - n * period_T
+    m = 0
+    for i in range(imp_t.shape[0]):
+        if imp_t[i] > t_from:
+            m += 1
+    return m, n
+
+
+def _inf(v):
+    return math.inf if v == -1 else v
+
+
+@dataclass(frozen=True)
+class Motion:
+    impacts: float          # m: int, or math.inf
+    period: float           # n: int, or math.inf
+    kind: str               # "periodic", "complete chattering", "chaotic", "no impact", "undetermined"
+    label: str
+
+    def __str__(self):
+        return self.label
+
+
+def describe(m: int, n: int) -> Motion:
+    """Motion from the kernel's (m, n) codes."""
+    if n == -2:
+        return Motion(math.nan, math.nan, "undetermined",
+                      "undetermined (record window shorter than 4 periods)")
+    mi, ni = _inf(m), _inf(n)
+    sym = lambda v: "∞" if v == math.inf else str(int(v))  # noqa: E731
+    if m == 0:
+        kind = "no impact"
+        label = f"no impact (period-{sym(ni)})"
+    elif n == -1:
+        kind = "chaotic"
+        label = f"chaotic ({sym(mi)}-impact period-{sym(ni)})"
+    elif m == -1:
+        kind = "complete chattering"
+        label = f"complete chattering (∞-impact period-{sym(ni)})"
+    else:
+        kind = "periodic"
+        label = f"{sym(mi)}-impact period-{sym(ni)}"
+    return Motion(mi, ni, kind, label)
+
+
+def classify(sol, rtol: float = PERIOD_RTOL, max_period: int = MAX_PERIOD) -> Motion:
+    """Classify a Solution as the paper does: (m impacts, period n) from its maps."""
+    p = sol.params
+    m, n = motion_class(np.ascontiguousarray(sol.poincare.x), np.ascontiguousarray(sol.poincare.v),
+                        np.ascontiguousarray(sol.impacts.t), sol.t_end, p.T, sol.n_chatter,
+                        rtol, max_period)
+    return describe(m, n)
