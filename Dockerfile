@@ -33,8 +33,8 @@ RUN apt-get update \
         python3=3.11.2-1+b1 python3-venv=3.11.2-1+b1 ca-certificates \
     && rm -rf /var/lib/apt/lists/*
 
-RUN groupadd --system --gid 10001 app \
-    && useradd --system --no-log-init --uid 10001 --gid app \
+RUN groupadd --gid 10001 app \
+    && useradd --no-log-init --no-create-home --uid 10001 --gid app \
         --home-dir "${IMPACT_CACHE}" --shell /usr/sbin/nologin app \
     && install -d -o app -g app -m 0750 "${IMPACT_CACHE}" "${NUMBA_CACHE_DIR}" \
         "${MPLCONFIGDIR}" "${IMPACT_CACHE}/tmp"
