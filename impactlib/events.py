@@ -36,15 +36,29 @@ def _lower_cubic(f, f1, f2, m3, tau):
 
 @jit
 def _bisect_cubic(f, f1, f2, m3, lo, hi):
-    # p(lo) >= 0 > p(hi) on a stretch where p decreases; returns a point where p >= 0
-    for _ in range(60):
-        mid = 0.5 * (lo + hi)
-        if mid <= lo or mid >= hi or hi - lo <= 1e-7 * hi:
+    # p(lo) >= 0 > p(hi) on a stretch where p decreases; returns a point where p >= 0.
+    # Illinois false position: superlinear, and it keeps the bracket.
+    plo = _lower_cubic(f, f1, f2, m3, lo)
+    phi = _lower_cubic(f, f1, f2, m3, hi)
+    side = 0
+    for _ in range(40):
+        if hi - lo <= 1e-5 * hi:
             break
-        if _lower_cubic(f, f1, f2, m3, mid) > 0.0:
-            lo = mid
+        den = plo - phi
+        mid = (lo * (-phi) + hi * plo) / den if den > 0.0 else 0.5 * (lo + hi)
+        if not (lo < mid < hi):
+            mid = 0.5 * (lo + hi)
+        pm = _lower_cubic(f, f1, f2, m3, mid)
+        if pm > 0.0:
+            lo, plo = mid, pm
+            if side == 1:
+                phi *= 0.5
+            side = 1
         else:
-            hi = mid
+            hi, phi = mid, pm
+            if side == -1:
+                plo *= 0.5
+            side = -1
     return lo
 
 
