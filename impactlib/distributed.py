@@ -1,0 +1,174 @@
+"""Bifurcation sweeps and regime maps on a Dask cluster (optional extra ``dask``).
+
+The parameter grid is cut into chunks; each chunk is one task that runs the ordinary
+local sweep on one thread (``impactlib.bifurcation(..., workers=1)`` for a block of
+values, ``impactlib.regime_map(..., workers=1)`` for a block of rows), and the chunks are
+put back together in order.  Every value is an independent run (or, with warm start, one
+sequential continuation per direction), so the result is the local run's, row for row::
+
+    from dask.distributed import Client
+    from impactlib import distributed as ild
+
+    with Client("tcp://scheduler:8786") as client:
+        bif = ild.bifurcation(client, il.Params(), "omega", np.linspace(0.1, 5, 100_000))
+        rmap = ild.regime_map(client, il.Params(), "omega", wx, "r", wy)
+
+Nothing here imports dask: the caller brings a ``distributed.Client`` (install with
+``pip install impact-explorer[dask]``), so ``impactlib`` works without the extra.  Each
+worker needs ``impactlib`` installed; Numba compiles (or loads its cache) once per
+worker process.
+"""
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from .model import Params
+from .sweeps import (CAP_PER_VALUE, Bifurcation, RegimeMap, _check_sweep, _concat,
+                     _values_array, bifurcation as _local_bifurcation,
+                     regime_map as _local_regime_map)
+
+TASKS_PER_THREAD = 4     # chunks per worker thread: enough to balance uneven values
+
+
+def _check_client(client):
+    if not (hasattr(client, "map") and hasattr(client, "gather")):
+        raise TypeError("client must be a dask.distributed.Client (pip install "
+                        f"impact-explorer[dask]), got {type(client).__name__}")
+
+
+def _thread_count(client) -> int:
+    try:
+        return max(1, sum(client.nthreads().values()))
+    except Exception:   # a client without live workers yet: fall back to one
+        return 1
+
+
+def _edges(n: int, size: int):
+    return [(a, min(a + size, n)) for a in range(0, n, size)]
+
+
+def _default_chunk(client, n: int, minimum: int) -> int:
+    return max(minimum, math.ceil(n / (TASKS_PER_THREAD * _thread_count(client))))
+
+
+# ---------------------------------------------------------------- tasks (run on workers)
+
+
+def _bifurcation_task(p, name, values, kwargs):
+    return _local_bifurcation(p, name, values, workers=1, **kwargs)
+
+
+def _regime_task(p, name_x, values_x, name_y, values_y, kwargs):
+    rm = _local_regime_map(p, name_x, values_x, name_y, values_y, workers=1, **kwargs)
+    return rm.impacts, rm.period, rm.status
+
+
+# ---------------------------------------------------------------- client side
+
+
+def bifurcation(client, p: Params, name: str, values, t_end: float = 500.0,
+                t_record: float = 250.0, method: str = "exact", *, chunk: int | None = None,
+                x0: float | None = None, v0: float = 0.0, warm_start: bool | str = False,
+                dt: float | None = None, rtol: float = 1e-6, atol: float = 1e-9,
+                cap_per_value: int = CAP_PER_VALUE, max_impacts: int = 1_000_000,
+                max_steps: int = 20_000_000) -> Bifurcation:
+    """:func:`impactlib.bifurcation` with the values spread over a Dask cluster.
+
+    Parameters
+    ----------
+    client : dask.distributed.Client
+    chunk : int, optional
+        Values per task; default splits the values into about four tasks per worker
+        thread (at least 16 values each).  Ignored with ``warm_start``, which is one
+        sequential continuation per direction ("both": the two run side by side).
+    Other parameters as :func:`impactlib.bifurcation`.
+
+    Returns
+    -------
+    Bifurcation
+        Identical rows, in the same order, to the local run; ``elapsed`` is the wall time
+        seen by the caller.
+    """
+    _check_client(client)
+    # validate here, once, so a bad argument fails before anything is sent
+    _check_sweep(p, [name], t_end, t_record, x0, v0, method, dt, rtol, atol)
+    values = _values_array(name, values)
+    if warm_start not in (False, True, "up", "down", "both"):
+        raise ValueError(f"warm_start={warm_start!r} must be False, 'up', 'down' or 'both'")
+    if chunk is not None and (isinstance(chunk, bool) or int(chunk) != chunk or chunk < 1):
+        raise ValueError(f"chunk={chunk!r} must be a whole number >= 1")
+    kwargs = dict(t_end=t_end, t_record=t_record, method=method, x0=x0, v0=v0, dt=dt,
+                  rtol=rtol, atol=atol, cap_per_value=cap_per_value,
+                  max_impacts=max_impacts, max_steps=max_steps)
+    tic = time.perf_counter()
+    if warm_start:
+        directions = ["up", "down"] if warm_start == "both" else [
+            "up" if warm_start is True else warm_start]
+        futs = client.map(_bifurcation_task, [p] * len(directions), [name] * len(directions),
+                          [values] * len(directions),
+                          [dict(kwargs, warm_start=d) for d in directions], pure=False)
+        parts = client.gather(futs)
+        return _concat(name, values, parts, time.perf_counter() - tic)
+    size = int(chunk) if chunk else _default_chunk(client, values.size, 16)
+    edges = _edges(values.size, size)
+    futs = client.map(_bifurcation_task, [p] * len(edges), [name] * len(edges),
+                      [values[a:b] for a, b in edges], [kwargs] * len(edges), pure=False)
+    parts = []
+    for (a, _), part in zip(edges, client.gather(futs)):
+        # each task numbered its values from 0: shift to positions in the full array
+        parts.append(Bifurcation(name=name, values=values, param=part.param, v=part.v,
+                                 t=part.t, phase=part.phase, index=part.index + a,
+                                 direction=part.direction, status=part.status,
+                                 n_impacts=part.n_impacts, elapsed=0.0))
+    return _concat(name, values, parts, time.perf_counter() - tic)
+
+
+def regime_map(client, p: Params, name_x: str, values_x, name_y: str, values_y,
+               t_end: float = 500.0, t_record: float = 250.0, method: str = "exact", *,
+               rows_per_task: int | None = None, x0: float | None = None, v0: float = 0.0,
+               dt: float | None = None, rtol: float = 1e-6, atol: float = 1e-9,
+               max_impacts: int = 1_000_000, max_steps: int = 20_000_000) -> RegimeMap:
+    """:func:`impactlib.regime_map` with blocks of rows (values_y) spread over a cluster.
+
+    Parameters
+    ----------
+    client : dask.distributed.Client
+    rows_per_task : int, optional
+        Rows of the (ny, nx) grid per task; default about four tasks per worker thread.
+    Other parameters as :func:`impactlib.regime_map`.
+
+    Returns
+    -------
+    RegimeMap
+        Identical to the local map; ``elapsed`` is the caller's wall time.
+    """
+    _check_client(client)
+    _check_sweep(p, [name_x, name_y], t_end, t_record, x0, v0, method, dt, rtol, atol)
+    if name_x == name_y:
+        raise ValueError(f"name_x and name_y are both {name_x!r}")
+    vx = _values_array(name_x, values_x)
+    vy = _values_array(name_y, values_y)
+    if rows_per_task is not None and (isinstance(rows_per_task, bool)
+                                      or int(rows_per_task) != rows_per_task
+                                      or rows_per_task < 1):
+        raise ValueError(f"rows_per_task={rows_per_task!r} must be a whole number >= 1")
+    kwargs = dict(t_end=t_end, t_record=t_record, method=method, x0=x0, v0=v0, dt=dt,
+                  rtol=rtol, atol=atol, max_impacts=max_impacts, max_steps=max_steps)
+    tic = time.perf_counter()
+    size = int(rows_per_task) if rows_per_task else _default_chunk(client, vy.size, 1)
+    edges = _edges(vy.size, size)
+    n = len(edges)
+    futs = client.map(_regime_task, [p] * n, [name_x] * n, [vx] * n, [name_y] * n,
+                      [vy[a:b] for a, b in edges], [kwargs] * n, pure=False)
+    blocks = client.gather(futs)
+    impacts = np.concatenate([b[0] for b in blocks])
+    period = np.concatenate([b[1] for b in blocks])
+    status = np.concatenate([b[2] for b in blocks])
+    return RegimeMap(name_x, vx, name_y, vy, impacts, period, status,
+                     time.perf_counter() - tic)
+
+
+__all__ = ["bifurcation", "regime_map"]
