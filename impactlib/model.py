@@ -118,8 +118,8 @@ class Params:
 class RunLimits:
     """Work ceilings of one simulation; hitting one stops the run with partial results."""
 
-    max_impacts: int = 2_000_000
-    max_steps: int = 50_000_000
+    max_impacts: int = 1_000_000
+    max_steps: int = 20_000_000
     max_samples: int = 5_000_000     # Poincare + dense samples held in memory
 
 

@@ -238,7 +238,7 @@ def section_times(t_record, t_end, phase, period):
 def run_constants(p: Params):
     sp = system_constants(p.m, p.c, p.k, p.g, p.r, p.omega)
     rate = p.rate()
-    hmax = 0.25 * min(p.T, 2 * math.pi / rate)
+    hmax = 0.25 * p.T
     return sp, rate, hmax
 
 
