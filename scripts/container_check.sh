@@ -126,17 +126,25 @@ wait_live() { # wait_live CONTAINER
     done
     podman logs "$1" | tail -30; return 1
 }
-ws_origin() { # ws_origin ORIGIN -> prints the HTTP status of a websocket upgrade on /app/ws
+ws_origin() { # ws_origin ORIGIN -> HTTP status of a websocket upgrade on /app/ws (as a page sends it)
     python3 - "$PORT" "$1" <<'EOF'
-import base64, os, socket, sys
+import base64, json, os, socket, sys, time
 port, origin = int(sys.argv[1]), sys.argv[2]
+payload = {"session_id": base64.urlsafe_b64encode(os.urandom(33)).decode(),
+           "session_expiry": int(time.time()) + 300}
+token = base64.urlsafe_b64encode(json.dumps(payload).encode()).decode().rstrip("=")
 key = base64.b64encode(os.urandom(16)).decode()
 req = (f"GET /app/ws HTTP/1.1\r\nHost: localhost:{port}\r\nUpgrade: websocket\r\n"
        f"Connection: Upgrade\r\nSec-WebSocket-Key: {key}\r\nSec-WebSocket-Version: 13\r\n"
-       f"Origin: {origin}\r\n\r\n")
+       f"Sec-WebSocket-Protocol: bokeh, {token}\r\nOrigin: {origin}\r\n\r\n")
 with socket.create_connection(("127.0.0.1", port), timeout=30) as s:
     s.sendall(req.encode())
-    print(s.recv(4096).split(b"\r\n", 1)[0].split()[1].decode())
+    status = s.recv(4096).split(b"\r\n", 1)[0].split()[1].decode()
+    if status == "101":
+        time.sleep(2)
+        s.sendall(b"\x88\x80" + os.urandom(4))  # masked close frame
+        time.sleep(0.5)
+    print(status)
 EOF
 }
 only_cache_writable() { # CONTAINER [strict]: the serving user may write under /var/cache/impact only
@@ -167,7 +175,7 @@ sys.exit(1 if bad or "/var/cache/impact/numba" not in writable else 0)
 EOF
 }
 ws_refused() { local s; s="$(ws_origin "$1")"; echo "status $s"; [ "$s" = 403 ]; }
-ws_admitted() { local s; s="$(ws_origin "$1")"; echo "status $s"; [ "$s" != 403 ]; }
+ws_admitted() { local s; s="$(ws_origin "$1")"; echo "status $s"; [ "$s" = 101 ]; }
 no_root_process() { # CONTAINER: every process in the container runs as uid 10001
     podman exec "$1" python -P -c '
 import glob, sys
@@ -203,7 +211,7 @@ check "image user is 10001" sh -c "[ \"\$(podman image inspect --format '{{.User
 check "every process runs as uid 10001" no_root_process "$NAME"
 check "writes only under /var/cache/impact (and /tmp, /var/tmp, /dev/shm)" only_cache_writable "$NAME"
 check "websocket from http://evil.example is refused (403)" ws_refused http://evil.example
-check "websocket from http://localhost:$PORT passes the origin check" ws_admitted "http://localhost:$PORT"
+check "websocket from http://localhost:$PORT is admitted (101)" ws_admitted "http://localhost:$PORT"
 check "server log has no traceback" no_traceback "$NAME"
 podman rm -f -t 5 "$NAME" >/dev/null
 

@@ -18,6 +18,7 @@ exercises those with podman.
 
 from __future__ import annotations
 
+import base64
 import json
 import os
 import re
@@ -311,6 +312,35 @@ def test_the_healthcheck_command_passes(replay, served):
     ]
     run = subprocess.run(cmd, capture_output=True, text=True, env=served["env"], timeout=60)
     assert run.returncode == 0, run.stdout + run.stderr
+
+
+def websocket_status(port: int, origin: str) -> int:
+    """HTTP status of a websocket upgrade on /app/ws sent with this Origin and a valid
+    unsigned Bokeh session token (as a browser's page would send), then hung up."""
+    payload = {"session_id": base64.urlsafe_b64encode(os.urandom(33)).decode(),
+               "session_expiry": int(time.time()) + 300}
+    token = base64.urlsafe_b64encode(json.dumps(payload).encode()).decode().rstrip("=")
+    key = base64.b64encode(os.urandom(16)).decode()
+    request = (
+        f"GET /app/ws HTTP/1.1\r\nHost: localhost:{port}\r\nUpgrade: websocket\r\n"
+        f"Connection: Upgrade\r\nSec-WebSocket-Key: {key}\r\nSec-WebSocket-Version: 13\r\n"
+        f"Sec-WebSocket-Protocol: bokeh, {token}\r\nOrigin: {origin}\r\n\r\n"
+    )
+    with socket.create_connection(("127.0.0.1", port), timeout=30) as s:
+        s.sendall(request.encode())
+        status = int(s.recv(4096).split(b"\r\n", 1)[0].split()[1])
+        if status == 101:
+            time.sleep(2)  # let the server open the session before the client leaves
+            s.sendall(b"\x88\x80" + os.urandom(4))  # masked close frame, no payload
+            time.sleep(0.5)
+        return status
+
+
+def test_websocket_admits_only_the_configured_origin(served):
+    port = served["port"]
+    assert websocket_status(port, "http://evil.example") == 403
+    assert websocket_status(port, f"http://evil.example:{port}") == 403
+    assert websocket_status(port, f"http://localhost:{port}") == 101
 
 
 def test_first_pages_compile_nothing_the_build_did_not_cache(served):
