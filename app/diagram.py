@@ -24,8 +24,12 @@ from .state import Run
 
 log = logging.getLogger(__name__)
 
-#: Chunks per diagram (values are interleaved across chunks).
-N_CHUNKS = 8
+#: Chunks per diagram (values are interleaved across chunks). Every chunk makes the
+#: browser redraw the diagram, so a few are better than many.
+N_CHUNKS = 4
+#: Points of one omega value closer than this fraction of the largest |v| are drawn once
+#: (a period-1 orbit is one dot, not a hundred dots on top of each other).
+DRAW_RESOLUTION = 1e-3
 #: At most this many impacts per omega value are kept (the first ones of the window).
 MAX_IMPACTS_PER_VALUE = 100
 
@@ -42,6 +46,16 @@ def chunk_values(values: np.ndarray, n_chunks: int = N_CHUNKS) -> list[np.ndarra
     return [np.ascontiguousarray(values[j::n]) for j in range(n)]
 
 
+def drawn(omega: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Indices of the rows worth drawing: one per (omega, v quantised to the screen)."""
+    if omega.size == 0:
+        return np.zeros(0, dtype=np.int64)
+    q = DRAW_RESOLUTION * max(1.0, float(np.max(np.abs(v))))
+    keys = np.column_stack((omega, np.round(v / q)))
+    _, first = np.unique(keys, axis=0, return_index=True)
+    return np.sort(first)
+
+
 def compute_chunk(run: Run, values: np.ndarray) -> dict:
     """Impacts only (no dense output), exact method, independent starts, the core's
     parallel sweep; at most MAX_IMPACTS_PER_VALUE impacts kept per value."""
@@ -49,8 +63,10 @@ def compute_chunk(run: Run, values: np.ndarray) -> dict:
                          t_record=run.t_record, method="exact", x0=run.x0, v0=run.v0,
                          warm_start=False, cap_per_value=MAX_IMPACTS_PER_VALUE)
     status = np.asarray(bif.status)
-    return {"omega": np.asarray(bif.param, dtype=float), "v": np.asarray(bif.v, dtype=float),
+    omega, v = np.asarray(bif.param, dtype=float), np.asarray(bif.v, dtype=float)
+    return {"omega": omega, "v": v,
             "t": np.asarray(bif.t, dtype=float), "phase": np.asarray(bif.phase, dtype=float),
+            "drawn": drawn(omega, v),
             # 1, 2: a work limit stopped the run; 3 only means more impacts than kept
             "partial": int(np.count_nonzero((status != 0) & (status != 3)))}
 

@@ -41,6 +41,18 @@ CSS = """
 """
 
 
+class _PromptFloatSlider(pn.widgets.FloatSlider):
+    # Panel waits 50 ms (Syncable._debounce) to coalesce browser events before running
+    # callbacks; a scene update costs a few ms, so wait less and feel the slider follow.
+    _debounce = 10
+
+
+class EditableSlider(pn.widgets.EditableFloatSlider):
+    """EditableFloatSlider whose slider reports moves after 10 ms instead of 50 ms."""
+
+    _slider_widget = _PromptFloatSlider
+
+
 def _csv(columns: dict) -> io.StringIO:
     names = list(columns)
     data = np.column_stack([np.asarray(columns[n], dtype=float) for n in names]) \
@@ -52,12 +64,24 @@ def _csv(columns: dict) -> io.StringIO:
     return buf
 
 
-def _dispatcher():
-    """Run a function on this session's event loop (safe from any thread)."""
+def _session_doc():
+    """The served session's Bokeh document, or None outside a server (tests)."""
     doc = pn.state.curdoc
-    if doc is not None and doc.session_context is not None:
-        return doc.add_next_tick_callback
-    return lambda fn: fn()
+    return doc if doc is not None and doc.session_context is not None else None
+
+
+def _dispatcher(doc):
+    """Run a function on the session's event loop (safe from any thread), holding the
+    document so that all its model changes go out in one message."""
+    if doc is None:
+        return lambda fn: fn()
+
+    def dispatch(fn):
+        def held():
+            with pn.io.hold(doc):
+                fn()
+        doc.add_next_tick_callback(held)
+    return dispatch
 
 
 class Explorer(pn.viewable.Viewer):
@@ -73,7 +97,8 @@ class Explorer(pn.viewable.Viewer):
         self.scene: compute.SceneData | None = None
         self.section: dict | None = None
         self._scene_run: Run | None = None   # run as loaded by the last scene button
-        self._dispatch = _dispatcher()
+        self._doc = _session_doc()
+        self._dispatch = _dispatcher(self._doc)
         self.displacement = DisplacementView()
         self.phase = PhaseView()
         self.impact_map = ImpactMapView()
@@ -89,7 +114,7 @@ class Explorer(pn.viewable.Viewer):
             self._show_message("Some settings in the link were not valid and were "
                                "replaced by defaults: " + "; ".join(errors))
         self._layout = self._build_layout()
-        if pn.state.curdoc is not None and pn.state.curdoc.session_context is not None:
+        if self._doc is not None:
             pn.state.on_session_destroyed(lambda ctx: self.runner.cancel())
             pn.state.onload(self._write_url)
 
@@ -102,14 +127,15 @@ class Explorer(pn.viewable.Viewer):
         def slider(name, fmt="0.000"):
             par = p[name]
             lo, hi = par.softbounds
-            return pn.widgets.EditableFloatSlider.from_param(
+            return EditableSlider.from_param(
                 par, start=lo, end=hi, step=par.step, format=fmt,
-                sizing_mode="stretch_width", label=par.label)
+                sizing_mode="stretch_width", label=par.label, css_classes=[f"ie-w-{name}"])
 
         def number(name, cls=pn.widgets.FloatInput, **kw):
             par = p[name]
             return cls.from_param(par, description=par.doc, label=par.label,
-                                  sizing_mode="stretch_width", **kw)
+                                  sizing_mode="stretch_width", css_classes=[f"ie-w-{name}"],
+                                  **kw)
 
         w = self.widgets = {
             "omega": slider("omega"), "r": slider("r"), "c": slider("c"),
@@ -119,6 +145,7 @@ class Explorer(pn.viewable.Viewer):
             "x0": number("x0"), "v0": number("v0"),
             "method": pn.widgets.Select.from_param(p.method, label=p.method.label,
                                                    description=p.method.doc,
+                                                   css_classes=["ie-w-method"],
                                                    sizing_mode="stretch_width"),
             "dt": number("dt", format="0.[000000]"),
             "rtol": number("rtol", format="0.[0000000000]"),
@@ -231,7 +258,8 @@ class Explorer(pn.viewable.Viewer):
 
     def _on_settings(self, *events) -> None:
         try:
-            self._apply()
+            with pn.io.hold(self._doc):   # one websocket message for all view updates
+                self._apply()
         except Exception as exc:   # never raise into Panel: message, keep last scene
             log.warning("update failed: %s: %s", type(exc).__name__, exc)
             self._show_message(f"Could not update: {type(exc).__name__}: {exc}")

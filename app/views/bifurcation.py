@@ -27,10 +27,11 @@ class BifurcationView:
         self.figure.scatter("omega", "v", source=self.source, size=2, color=WALL,
                             alpha=0.55, name="bifurcation")
         self.marker = Span(location=2.0, dimension="height", line_color=IMPACT,
-                           line_width=2, line_alpha=0.7, name="bifurcation_marker")
+                           line_width=2, line_alpha=0.7, name="bifurcation_marker",
+                           level="overlay")
         self.figure.add_layout(self.marker)
         self.figure.scatter("omega", "v", source=self.current, size=5, color=IMPACT,
-                            name="bifurcation_current")
+                            name="bifurcation_current", level="overlay")
 
     def reset(self, run: Run) -> None:
         """A new diagram starts: clear the points, set the ω range and the title."""
@@ -45,10 +46,12 @@ class BifurcationView:
     def append(self, part: dict) -> None:
         """Stream one chunk (only the new points travel to the browser)."""
         self.parts.append(part)
-        self.source.stream({"omega": part["omega"], "v": part["v"]})
+        shown = part["drawn"]
+        self.source.stream({"omega": part["omega"][shown], "v": part["v"][shown]})
 
     def table(self) -> dict:
-        """Every point of the diagram so far, sorted by ω then time (for the CSV)."""
+        """Every recorded impact so far (also those drawn as one dot), sorted by ω then
+        time (for the CSV)."""
         if not self.parts:
             return {c: np.zeros(0) for c in COLUMNS}
         cols = {c: np.concatenate([p[c] for p in self.parts]) for c in COLUMNS}
