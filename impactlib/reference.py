@@ -80,6 +80,7 @@ class RefResult:
     chatter_ends : accumulation times of chatters stepped through to ``v_stop``.
     t_last : time the search reached (the n-th impact, or t_max).
     reason : why it stopped ("n impacts", "t_max", "stuck for good").
+    x_end, v_end : the state at t_max when the search got there (reason "t_max").
     """
 
     t: np.ndarray
@@ -90,6 +91,8 @@ class RefResult:
     chatter_ends: list = field(default_factory=list)
     t_last: float = 0.0
     reason: str = ""
+    x_end: float = math.nan      # state at t_max when the search reached it ("t_max")
+    v_end: float = math.nan
 
 
 # ----------------------------------------------------------------- mpmath closed form
@@ -362,6 +365,7 @@ def mp_impacts(p: Params, n: int, x0: float | None = None, v0: float = 0.0, t0: 
     out_t, out_v = [], []
     sticking, chatter_ends = [], []
     reason = "n impacts"
+    x_end = v_end = math.nan
     while len(out_t) < n:
         at_wall = x == S.g
         if at_wall and v < 0:
@@ -380,6 +384,7 @@ def mp_impacts(p: Params, n: int, x0: float | None = None, v0: float = 0.0, t0: 
                 if tr >= tmax:
                     reason = "stuck for good" if ctx.isinf(tr) else "t_max"
                     t = tr
+                    x_end, v_end = float(S.g), 0.0
                     break
                 t = tr
         seg = _Segment(S, t, x, v)
@@ -398,6 +403,9 @@ def mp_impacts(p: Params, n: int, x0: float | None = None, v0: float = 0.0, t0: 
         if ti is None:
             reason = "t_max"
             t = tmax
+            if not ctx.isinf(tmax):
+                xe, ve = seg.xv(tmax)
+                x_end, v_end = float(xe), float(ve)
             break
         xi, vi = seg.xv(ti)
         if vi > 0:
@@ -407,7 +415,7 @@ def mp_impacts(p: Params, n: int, x0: float | None = None, v0: float = 0.0, t0: 
         t, x, v = ti, S.g, -S.r * vi
     return RefResult(t=np.array([float(a) for a in out_t]), v=np.array([float(a) for a in out_v]),
                      t_mp=out_t, v_mp=out_v, sticking=sticking, chatter_ends=chatter_ends,
-                     t_last=float(t), reason=reason)
+                     t_last=float(t), reason=reason, x_end=x_end, v_end=v_end)
 
 
 def mp_state(p: Params, ts, x0: float | None = None, v0: float = 0.0, t0: float = 0.0,
