@@ -21,6 +21,7 @@ from concurrent.futures import ThreadPoolExecutor
 import numpy as np
 import panel as pn
 import param
+from panel.io.state import set_curdoc
 
 from . import accuracy, compute, state
 from .diagram import DiagramRunner
@@ -78,7 +79,7 @@ def _dispatcher(doc):
 
     def dispatch(fn):
         def held():
-            with pn.io.hold(doc):
+            with set_curdoc(doc), pn.io.hold(doc):
                 fn()
         doc.add_next_tick_callback(held)
     return dispatch
@@ -107,6 +108,9 @@ class Explorer(pn.viewable.Viewer):
         self.runner = DiagramRunner(self._dispatch, self._on_chunk, self._on_done,
                                     self._on_diagram_error)
         self.diagram_elapsed: float | None = None
+        # Served: start the diagram once the page is connected (updates to Panel panes
+        # made before that can be lost); without a server: at once.
+        self._loaded = self._doc is None
         self._build_widgets()
         self.settings.param.watch(self._on_settings, list(state.QUERY_NAMES))
         self._apply(initial=True)
@@ -116,7 +120,7 @@ class Explorer(pn.viewable.Viewer):
         self._layout = self._build_layout()
         if self._doc is not None:
             pn.state.on_session_destroyed(lambda ctx: self.runner.cancel())
-            pn.state.onload(self._write_url)
+            pn.state.onload(self._on_load)
 
     # -- widgets and layout ------------------------------------------------------------
 
@@ -301,12 +305,19 @@ class Explorer(pn.viewable.Viewer):
         if not initial:
             self._write_url()
 
+    def _on_load(self) -> None:
+        with pn.io.hold(self._doc):
+            self._loaded = True
+            self._restart_diagram(self.run)
+            self._write_url()
+
     def _restart_diagram(self, run: Run) -> None:
         self.bifurcation.reset(run)
         self.progress.value = 0
         self.diagram_elapsed = None
         self.diagram_status.object = f"computing {run.bif_n} ω values…"
-        self.runner.start(run)
+        if self._loaded:
+            self.runner.start(run)
 
     # -- diagram callbacks (on the event loop) ----------------------------------------
 

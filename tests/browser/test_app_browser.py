@@ -95,6 +95,8 @@ def test_page_loads_with_five_plots_holding_data(page, server):
     assert not page.locator(".ie-message").is_visible()
     assert "Motion:" in text(page, "ie-badge")
     assert page.evaluate("ie.model('bifurcation_marker').location") == 2
+    page.wait_for_function("() => true")
+    assert text(page, "ie-diagram-status").startswith("complete: 400 ω values")
     RESULTS.mkdir(exist_ok=True)
     page.screenshot(path=str(RESULTS / "app.png"), full_page=True)
 
@@ -133,6 +135,7 @@ def test_r_change_restarts_diagram(page, server):
         times.append(time.perf_counter() - t0)
     after = snapshot(page)
     assert after["bif"] != before["bif"] and after["disp"] != before["disp"]
+    assert text(page, "ie-diagram-status").startswith("complete")
     FIGURES["diagram"] = times
     assert statistics.median(times) < 2.0, times      # target < 1 s; see app_figures.md
 
