@@ -409,7 +409,15 @@ def markdown(rows, quick: bool, png_name: str) -> str:
         "",
         f"![work-precision]({png_name})",
         "",
-    ]
+        "## Summary",
+        "",
+        "Per case: the exact method's largest errors and run time; for rk4 and rk45 the most",
+        "accurate setting run and, in brackets, how many settings missed or added impacts.",
+        "",
+        "| case | exact max\\|Δt\\| | exact max\\|Δv\\|/V | exact ms | best rk4 (max\\|Δt\\| @ ms) "
+        "| best rk45 (max\\|Δt\\| @ ms) | solve_ivp cross-check |",
+        "|---|---|---|---|---|---|---|",
+    ] + summary_lines(rows) + ["", "## All rows", ""]
     by_case = {}
     for r in rows:
         by_case.setdefault(r.case, []).append(r)
@@ -423,12 +431,64 @@ def markdown(rows, quick: bool, png_name: str) -> str:
             desc += f"; {case.note}"
         lines.append(desc + ".")
         lines.append("")
-        lines.append("| " + " | ".join(HEADER) + " |")
+        lines.append("| " + " | ".join(h.replace("|", "\\|") for h in HEADER) + " |")
         lines.append("|" + "---|" * len(HEADER))
         for r in rs:
             lines.append("| " + " | ".join(c.replace("|", "\\|") for c in row_cells(r)) + " |")
         lines.append("")
     return "\n".join(lines)
+
+
+def summary_lines(rows):
+    by_case = {}
+    for r in rows:
+        by_case.setdefault(r.case, []).append(r)
+    out = []
+    for case, rs in by_case.items():
+        cells = [case.name]
+        ex = next(r for r in rs if r.setting and r.setting.method == "exact")
+        c = ex.cmp
+        if case.dense:
+            cells += [f"state {_e(c.err_state)}", "—"]
+        elif c.compared:
+            cells += [_e(c.err_t), _e(c.err_v)]
+        else:
+            cells += [f"no impact ({c.extra} extra)", "—"]
+        cells.append(f"{1e3 * ex.seconds:.3g}")
+        for method in ("rk4", "rk45"):
+            mine = [r for r in rs if r.setting and r.setting.method == method]
+            ok = [r for r in mine if not r.error]
+            bad = sum(1 for r in ok if r.cmp.missed or r.cmp.extra)
+            unstable = sum(1 for r in mine if r.error)
+
+            def err(r):
+                return r.cmp.err_state if case.dense else (r.cmp.err_t if r.cmp.compared
+                                                           else math.inf)
+            good = [r for r in ok if not (r.cmp.missed or r.cmp.extra)]
+            if good and not all(math.isinf(err(r)) for r in good):
+                b = min(good, key=err)
+                txt = f"{_e(err(b))} @ {1e3 * b.seconds:.3g} ({b.setting.label.split()[-1]})"
+            elif good:
+                txt = "no impact (all agree)"
+            else:
+                txt = "every setting wrong"
+            extra = []
+            if bad:
+                extra.append(f"{bad} missed/added")
+            if unstable:
+                extra.append(f"{unstable} unstable dt")
+            cells.append(txt + (f" [{', '.join(extra)}]" if extra else ""))
+        ivp = next(r for r in rs if r.setting is None)
+        if ivp.error:
+            cells.append(ivp.error)
+        elif ivp.cmp.missed:
+            cells.append(f"misses {ivp.cmp.missed} impacts")
+        elif ivp.cmp.compared:
+            cells.append(f"agrees to {_e(max(ivp.cmp.err_t, ivp.cmp.err_v))}")
+        else:
+            cells.append("no impact")
+        out.append("| " + " | ".join(cells) + " |")
+    return out
 
 
 def plot(rows, path):
