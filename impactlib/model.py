@@ -15,6 +15,10 @@ import numpy as np
 
 PARAM_NAMES = ("m", "c", "k", "g", "r", "omega")
 METHODS = ("exact", "rk4", "rk45")
+#: Magnitudes the closed form can represent: beyond them its constants (c/m, k/m, m*m,
+#: (2 c omega)^2, the period 2 pi/omega) overflow or underflow double precision.
+MAGNITUDE_MAX = 1e50
+MAGNITUDE_MIN = 1e-50      # smallest m and omega
 
 
 @dataclass(frozen=True)
@@ -62,6 +66,14 @@ def _param_problems(values: dict) -> list[str]:
         problems.append(f"r={f['r']!r} must lie in [0, 1]")
     if f["omega"] <= 0:
         problems.append(f"omega={f['omega']!r} must be > 0")
+    for n in PARAM_NAMES:
+        if math.isfinite(f[n]) and abs(f[n]) > MAGNITUDE_MAX:
+            problems.append(f"{n}={f[n]!r} is beyond {MAGNITUDE_MAX:g} in magnitude "
+                            "(the closed form's constants would overflow)")
+    for n in ("m", "omega"):
+        if 0 < f[n] < MAGNITUDE_MIN:
+            problems.append(f"{n}={f[n]!r} must be >= {MAGNITUDE_MIN:g} "
+                            "(the closed form's constants would overflow)")
     return problems
 
 
