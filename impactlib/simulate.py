@@ -294,7 +294,9 @@ def simulate(p: Params, t_end: float = 500.0, x0: float | None = None, v0: float
             0.0 if dt is None else dt, rtol, atol, imp_t, imp_v, stick, pc_t, pc_x, pc_v,
             d_t, d_x, d_v, max_impacts, max_steps)
         elapsed = time.perf_counter() - tic
-        if status == OUTPUT_FULL and cap < max_impacts:
+        # more impacts in the window than the arrays held: run again with room for all of
+        # them, also when a work limit ended the run (its partial results must be complete)
+        if n_rec > cap and cap < max_impacts:
             cap = min(max_impacts, max(2 * cap, n_rec))
             continue
         break
