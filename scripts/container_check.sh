@@ -87,7 +87,8 @@ else
         >"$WORK/upgrade.log" 2>&1 || { tail -30 "$WORK/upgrade.log"; exit 1; }
     tar -C "$ROOTFS" -c . | podman import \
         --change 'ENV PATH=/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin' \
-        --change 'CMD ["bash"]' - "docker.io/library/$BASE" >/dev/null
+        --change 'CMD ["bash"]' - "docker.io/library/$BASE" >"$WORK/import.log" 2>&1 \
+        || { cat "$WORK/import.log"; exit 1; }
     rm -rf "$ROOTFS"
     say "base $BASE: imported"
 fi
@@ -209,7 +210,8 @@ no_traceback() { # CONTAINER
 
 # ---- run: defaults -----------------------------------------------------------------
 say "run $NAME on 127.0.0.1:$PORT"
-podman --runtime runc run -d --name "$NAME" --pull never \
+# --health-interval disable: no systemd here for podman's timer; `healthcheck run` still works.
+podman --runtime runc run -d --name "$NAME" --pull never --health-interval disable \
     --ulimit nofile=1024:1024 --ulimit nproc=1024:1024 \
     -e IMPACT_ALLOWED_ORIGINS="localhost:$PORT" -p "127.0.0.1:$PORT:5006" "$IMAGE" >/dev/null
 check "starts and answers /liveness" wait_live "$NAME"
@@ -227,11 +229,12 @@ podman rm -f -t 5 "$NAME" >/dev/null
 
 # ---- refuses a wildcard origin -------------------------------------------------------
 check "IMPACT_ALLOWED_ORIGINS='*' is refused (exit 64)" sh -c \
-    "podman --runtime runc run --rm --pull never --ulimit nofile=1024:1024 --ulimit nproc=1024:1024 -e 'IMPACT_ALLOWED_ORIGINS=*' '$IMAGE'; [ \$? -eq 64 ]"
+    "podman --runtime runc run --rm --pull never --health-interval disable --ulimit nofile=1024:1024 --ulimit nproc=1024:1024 -e 'IMPACT_ALLOWED_ORIGINS=*' '$IMAGE'; [ \$? -eq 64 ]"
 
 # ---- run: read-only root, no capabilities, a volume on the cache -----------------------
 say "run $HARD: --read-only, cap-drop ALL, no-new-privileges, volume on /var/cache/impact"
-podman --runtime runc run -d --name "$HARD" --pull never --read-only --read-only-tmpfs=false \
+podman --runtime runc run -d --name "$HARD" --pull never --health-interval disable \
+    --read-only --read-only-tmpfs=false \
     --cap-drop ALL --security-opt no-new-privileges \
     --ulimit nofile=1024:1024 --ulimit nproc=1024:1024 \
     -v "$VOLUME:/var/cache/impact" \
