@@ -16,11 +16,13 @@ from ._jit import jit
 
 PERIOD_RTOL = 1e-4    # transients of the paper's damping (c = 0.05) decay to ~1e-5 in 250 s
 MAX_PERIOD = 32
+SETTLE_R2 = 0.8       # log-distance decay this well fitted by a line counts as settling
 
 
 @jit
 def motion_class(pc_x, pc_v, imp_t, t_end, period_T, n_chatter, rtol, max_period):
-    """(m, n) from Poincare points and impact times in the window; -1 stands for infinity."""
+    """(m, n) from Poincare points and impact times in the window; -1 stands for infinity,
+    m = -3 for a transient still settling onto a period-n orbit."""
     npts = pc_x.shape[0]
     if npts < 4:
         return -2, -2          # window too short to tell
@@ -42,6 +44,31 @@ def motion_class(pc_x, pc_v, imp_t, t_end, period_T, n_chatter, rtol, max_period
             n = cand
             break
     if n < 0:
+        # not periodic yet: a steady geometric decay of |P_{i+n} - P_i| is a transient
+        # settling onto a period-n orbit (slow when a multiplier is near -1 or 1)
+        for cand in range(1, max_period + 1):
+            cnt = npts - cand - half
+            if cnt < 8:
+                break
+            sx = 0.0
+            sy = 0.0
+            sxx = 0.0
+            sxy = 0.0
+            syy = 0.0
+            for i in range(half, npts - cand):
+                d = max(abs(pc_x[i + cand] - pc_x[i]), abs(pc_v[i + cand] - pc_v[i]))
+                y = math.log(d + 1e-300)
+                xi = float(i)
+                sx += xi
+                sy += y
+                sxx += xi * xi
+                sxy += xi * y
+                syy += y * y
+            vx = sxx - sx * sx / cnt
+            vy = syy - sy * sy / cnt
+            cxy = sxy - sx * sy / cnt
+            if vx > 0.0 and vy > 0.0 and cxy < 0.0 and cxy * cxy / (vx * vy) >= SETTLE_R2:
+                return -3, cand
         return (-1 if imp_t.shape[0] > 0 else 0), -1
     if n_chatter > 0:
         return -1, n
@@ -61,7 +88,8 @@ def _inf(v):
 class Motion:
     impacts: float          # m: int, or math.inf
     period: float           # n: int, or math.inf
-    kind: str               # "periodic", "complete chattering", "chaotic", "no impact", "undetermined"
+    kind: str               # "periodic", "complete chattering", "chaotic", "not settled",
+                            # "no impact", "undetermined"
     label: str
 
     def __str__(self):
@@ -75,6 +103,9 @@ def describe(m: int, n: int) -> Motion:
                       "undetermined (record window shorter than 4 periods)")
     mi, ni = _inf(m), _inf(n)
     sym = lambda v: "∞" if v == math.inf else str(int(v))  # noqa: E731
+    if m == -3:
+        return Motion(math.nan, math.nan, "not settled",
+                      f"not settled (approaching period-{n}; lengthen the transient)")
     if m == 0:
         kind = "no impact"
         label = f"no impact (period-{sym(ni)})"

@@ -152,3 +152,15 @@ def test_omega_12_transient_length(orbit12):
     assert il.classify(il.simulate(P12, t_end=500.0, t_record=250.0)).kind != "periodic"
     m = il.classify(il.simulate(P12, t_end=2000.0, t_record=1750.0))
     assert m.label == "3-impact period-2"
+
+
+def test_omega_12_paper_window_is_reported_as_settling_onto_period_two():
+    # with the multiplier -0.94 per 2T above, |P_{i+2} - P_i| decays geometrically in
+    # [250, 500]: classify must say "not settled", approaching period 2 (not "chaotic")
+    m = il.classify(il.simulate(P12, t_end=500.0, t_record=250.0))
+    assert m.kind == "not settled" and "period-2" in m.label
+
+
+def test_chaotic_scene_is_not_mistaken_for_settling():
+    m = il.classify(il.simulate(PAPER.replace(omega=2.8), t_end=500.0, t_record=250.0))
+    assert m.kind == "chaotic"
