@@ -6,7 +6,8 @@ from .classify import Motion, classify
 from .model import FIELDS, METHODS, PARAM_NAMES, Params, RunLimits, rk4_stability_limit
 from .simulate import Impacts, Samples, Solution, simulate
 from .sweeps import Bifurcation, RegimeMap, bifurcation, iter_bifurcation, regime_map
+from .warmup import warmup
 
 __all__ = ["FIELDS", "METHODS", "PARAM_NAMES", "Params", "RunLimits", "rk4_stability_limit",
            "Impacts", "Samples", "Solution", "simulate", "Motion", "classify",
-           "Bifurcation", "RegimeMap", "bifurcation", "iter_bifurcation", "regime_map"]
+           "Bifurcation", "RegimeMap", "bifurcation", "iter_bifurcation", "regime_map", "warmup"]

@@ -1,0 +1,18 @@
+"""Compile (or load from the Numba cache) every kernel a served page uses."""
+from __future__ import annotations
+
+
+def warmup() -> None:
+    from .classify import classify
+    from .model import Params
+    from .simulate import simulate
+    from .sweeps import bifurcation, regime_map
+
+    p = Params()
+    sol = simulate(p, t_end=20.0, t_record=10.0, dense=16)
+    classify(sol)
+    simulate(p, t_end=5.0, t_record=0.0, method="rk4", dt=0.01, dense=4)
+    simulate(p, t_end=5.0, t_record=0.0, method="rk45", dense=4)
+    bifurcation(p, "omega", [1.0, 2.0], t_end=20.0, t_record=10.0, workers=1)
+    bifurcation(p, "omega", [1.0, 2.0], t_end=20.0, t_record=10.0, warm_start="up", workers=1)
+    regime_map(p, "omega", [1.0, 2.0], "r", [0.5, 0.8], t_end=20.0, t_record=10.0, workers=1)
