@@ -107,50 +107,73 @@ def flight_state(sp, seg, s):
     q = sp[Q_]
     sq = sp[SQ]
     w0sq = sp[W0SQ]
+    # e^{-alpha s} C - 1 (eCm1) and e^{-alpha s} S, via half angles and expm1 so that the
+    # increment from the segment start stays accurate for small s (short chatter hops)
     if q > 0.0:
-        ex = math.exp(-alpha * s)
-        z = sq * s
-        eC = ex * math.cos(z)
-        eS = ex * math.sin(z) / sq
+        em1 = math.expm1(-alpha * s)
+        half = 0.5 * sq * s
+        sh = math.sin(half)
+        ch = math.cos(half)
+        cm1 = -2.0 * sh * sh
+        eCm1 = em1 * (1.0 + cm1) + cm1
+        eS = (1.0 + em1) * 2.0 * sh * ch / sq
     elif q == 0.0:
-        ex = math.exp(-alpha * s)
-        eC = ex
-        eS = ex * s
+        em1 = math.expm1(-alpha * s)
+        eCm1 = em1
+        eS = (1.0 + em1) * s
     else:
         z = sq * s
-        if z < 20.0:
+        if z < 1.0:
+            em1 = math.expm1(-alpha * s)
+            shh = math.sinh(0.5 * z)
+            chh = math.cosh(0.5 * z)
+            cm1 = 2.0 * shh * shh
+            eCm1 = em1 * (1.0 + cm1) + cm1
+            eS = (1.0 + em1) * 2.0 * shh * chh / sq
+        elif z < 20.0:
             ex = math.exp(-alpha * s)
-            eC = ex * math.cosh(z)
+            eCm1 = ex * math.cosh(z) - 1.0
             eS = ex * math.sinh(z) / sq
         else:
             e1 = math.exp(sp[LAM1] * s)
             e2 = math.exp(sp[LAM2] * s)
-            eC = 0.5 * (e1 + e2)
+            eCm1 = 0.5 * (e1 + e2) - 1.0
             eS = 0.5 * (e1 - e2) / sq
     h0 = seg[H0]
     hv0 = seg[HV0]
-    h = h0 * eC + (hv0 + alpha * h0) * eS
-    hd = -w0sq * h0 * eS + hv0 * (eC - alpha * eS)
+    dh = h0 * eCm1 + (hv0 + alpha * h0) * eS
+    dhd = -w0sq * h0 * eS + hv0 * (eCm1 - alpha * eS)
+    h = h0 + dh
+    hd = hv0 + dhd
     hdd = -2.0 * alpha * hd - w0sq * h
     hddd = -2.0 * alpha * hdd - w0sq * hd
 
     om = sp[OM]
-    cw = math.cos(om * s)
-    sw = math.sin(om * s)
-    u = seg[FC] * cw + seg[FS] * sw
-    ud = om * (seg[FS] * cw - seg[FC] * sw)
+    fc = seg[FC]
+    fs = seg[FS]
+    hw = 0.5 * om * s
+    shw = math.sin(hw)
+    chw = math.cos(hw)
+    cwm1 = -2.0 * shw * shw
+    sw = 2.0 * shw * chw
+    cw = 1.0 + cwm1
+    u = fc * cw + fs * sw
+    ud = om * (fs * cw - fc * sw)
+    du = fc * cwm1 + fs * sw                  # u(s) - u(0)
     if sp[RES] != 0.0:
-        xp = s * u
-        xpd = u + s * ud
+        dxp = s * u                           # x_p(0) = 0
+        dxpd = du + s * ud                    # x_p'(0) = u(0)
         xpdd = 2.0 * ud - s * om * om * u
         xpddd = -3.0 * om * om * u - s * om * om * ud
     else:
-        xp = u
-        xpd = ud
+        dxp = du
+        dxpd = om * (fs * cwm1 - fc * sw)     # u'(s) - u'(0)
         xpdd = -om * om * u
         xpddd = -om * om * ud
     rh = math.sqrt(hd * hd + w0sq * h * h)
-    return h + xp, hd + xpd, hdd + xpdd, hddd + xpddd, rh, abs(h) + abs(xp)
+    x = seg[X0] + (dh + dxp)
+    v = seg[V0] + (dhd + dxpd)
+    return x, v, hdd + xpdd, hddd + xpddd, rh, abs(seg[X0]) + abs(dh) + abs(dxp)
 
 
 @jit
