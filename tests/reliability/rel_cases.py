@@ -226,8 +226,14 @@ def cli_cases() -> list[Case]:
 
 # -- app: URL and widgets --------------------------------------------------------------
 
-def _plain(text: str) -> str:
-    return html.unescape(re.sub(r"<[^>]+>", "", html.unescape(text or ""))).strip()
+def _seen(message: str) -> str:
+    """The app's message as the reader sees it (it is HTML-escaped text)."""
+    return html.unescape(message or "").strip()
+
+
+def _badge(text: str) -> str:
+    """The motion badge as the reader sees it (an HTML fragment)."""
+    return html.unescape(re.sub(r"<[^>]+>", "", text or "")).strip()
 
 
 @functools.cache
@@ -273,8 +279,8 @@ def _widget(settings_changes: dict, widget_changes: dict) -> Callable[[], Outcom
             e.runner.cancel()
         after = _scene_data(e)
         kept = all(after[v] is before[v] for v in before)
-        msg = _plain(e.message)
-        badge = _plain(e.badge.object)
+        msg = _seen(e.message)
+        badge = _badge(e.badge.object)
         out = (Outcome("rejected", msg, kept) if msg else
                Outcome("runs", badge.split(" · computed")[0]
                        + (" ⚠ " + badge.split("⚠")[1].strip() if "⚠" in badge else ""),
@@ -298,10 +304,10 @@ def _url(args: dict) -> Callable[[], Outcome]:
             return Outcome("crash", f"{type(exc).__name__}: {exc}", False)
         e.runner.cancel()
         shown = len(e.displacement.source.data.get("x", ())) > 0 and e.run is not None
-        msg = _plain(e.message)
+        msg = _seen(e.message)
         if msg:
             return Outcome("rejected", msg, shown)
-        badge = _plain(e.badge.object).split(" · computed")[0]
+        badge = _badge(e.badge.object).split(" · computed")[0]
         return Outcome("runs", badge, shown)
     return act
 

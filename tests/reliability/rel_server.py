@@ -1,0 +1,228 @@
+"""A served app on a loopback port, its log and memory, and light Bokeh client sessions.
+
+Used by the reliability tests (bad input over the wire, security, load). The server is
+started the way a user starts it (``panel serve app/app.py``), bound to 127.0.0.1 only,
+in its own process group so that it and anything it forks stop together.
+"""
+from __future__ import annotations
+
+import base64
+import os
+import re
+import signal
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+import urllib.error
+import urllib.request
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+#: Server logs and load figures. Not under test-results/: pytest-playwright empties that
+#: folder when the browser tests start, which may be while a reliability server runs.
+RESULTS = Path(os.environ.get("RELIABILITY_RESULTS",
+                              Path(tempfile.gettempdir()) / "impact-reliability"))
+
+#: What must never appear in the server log: a traceback, an ERROR record, or tornado's
+#: "Exception in callback" (a callback that raised into the event loop).
+BAD_LOG = re.compile(r"Traceback|\bERROR\b|Exception in callback|error handling message")
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+class Served:
+    """``panel serve app/app.py`` on 127.0.0.1:<port>; ``stop()`` ends its process group."""
+
+    def __init__(self, log_name: str, extra_args=(), origin: str | None = "localhost",
+                 env: dict | None = None, start_timeout: float = 120.0):
+        RESULTS.mkdir(parents=True, exist_ok=True)
+        self.port = free_port()
+        self.log_path = RESULTS / log_name
+        panel = Path(sys.executable).with_name("panel")
+        cmd = [str(panel), "serve", "app/app.py", "--address", "127.0.0.1",
+               "--port", str(self.port), *extra_args]
+        # origin=None: no --allow-websocket-origin at all (Bokeh's own default);
+        # "localhost": what scripts/app.sh passes when IMPACT_ALLOWED_ORIGINS is unset.
+        if origin == "localhost":
+            cmd += ["--allow-websocket-origin", f"localhost:{self.port}"]
+        elif origin is not None:
+            cmd += ["--allow-websocket-origin", origin]
+        self.cmd = cmd
+        with open(self.log_path, "wb") as out:
+            self.proc = subprocess.Popen(cmd, cwd=ROOT, stdout=out, stderr=subprocess.STDOUT,
+                                         start_new_session=True, env={**os.environ, **(env or {})})
+        self.base = f"http://localhost:{self.port}"
+        self.url = f"{self.base}/app"
+        deadline = time.monotonic() + start_timeout
+        while True:
+            try:
+                with urllib.request.urlopen(self.url, timeout=10) as r:
+                    if r.status == 200:
+                        break
+            except OSError:
+                pass
+            if self.proc.poll() is not None or time.monotonic() > deadline:
+                self.stop()
+                raise RuntimeError(f"server did not start; log:\n{self.log()[-3000:]}")
+            time.sleep(0.3)
+
+    # -- log -------------------------------------------------------------------------
+    def log(self) -> str:
+        return self.log_path.read_text(errors="replace")
+
+    def log_offset(self) -> int:
+        return self.log_path.stat().st_size
+
+    def log_since(self, offset: int) -> str:
+        with open(self.log_path, "rb") as f:
+            f.seek(offset)
+            return f.read().decode(errors="replace")
+
+    def bad_log_lines(self, offset: int = 0) -> list[str]:
+        return [line for line in self.log_since(offset).splitlines() if BAD_LOG.search(line)]
+
+    # -- process -----------------------------------------------------------------------
+    def rss_mb(self) -> float:
+        """Resident set size of the server process (VmRSS from /proc), in MB."""
+        with open(f"/proc/{self.proc.pid}/status") as f:
+            for line in f:
+                if line.startswith("VmRSS:"):
+                    return int(line.split()[1]) / 1024.0
+        raise RuntimeError("no VmRSS")
+
+    def get(self, path: str) -> tuple[int, bytes]:
+        try:
+            with urllib.request.urlopen(self.base + path, timeout=30) as r:
+                return r.status, r.read()
+        except urllib.error.HTTPError as err:
+            return err.code, err.read()
+
+    def stop(self) -> None:
+        if self.proc.poll() is None:
+            os.killpg(self.proc.pid, signal.SIGTERM)
+            try:
+                self.proc.wait(10)
+            except subprocess.TimeoutExpired:
+                os.killpg(self.proc.pid, signal.SIGKILL)
+                self.proc.wait(10)
+
+
+def websocket_status(port: int, origin: str | None, path: str = "/app/ws") -> int:
+    """HTTP status of a websocket upgrade request sent with this Origin header."""
+    key = base64.b64encode(os.urandom(16)).decode()
+    lines = [f"GET {path} HTTP/1.1", f"Host: localhost:{port}", "Upgrade: websocket",
+             "Connection: Upgrade", f"Sec-WebSocket-Key: {key}", "Sec-WebSocket-Version: 13"]
+    if origin is not None:
+        lines.append(f"Origin: {origin}")
+    with socket.create_connection(("127.0.0.1", port), timeout=30) as s:
+        s.sendall(("\r\n".join(lines) + "\r\n\r\n").encode())
+        return int(s.recv(4096).split(b"\r\n", 1)[0].split()[1])
+
+
+# -- Bokeh client sessions ------------------------------------------------------------
+
+def open_session(url: str, args: dict | None = None, retries: int = 3):
+    """A Bokeh client session on the app (the real document, its real widget models)."""
+    import panel.models  # noqa: F401  (registers Panel's model types for deserialization)
+    from bokeh.client import pull_session
+
+    for attempt in range(retries):
+        try:
+            session = pull_session(url=url, arguments=args or {})
+        except Exception:           # noqa: BLE001 - retried, then re-raised
+            if attempt == retries - 1:
+                raise
+            time.sleep(1.0)
+            continue
+        send_document_ready(session)
+        return session
+
+
+def send_document_ready(session) -> None:
+    """Tell the server the page has loaded, as BokehJS does once it has rendered
+    (Panel runs ``pn.state.onload`` callbacks then; the app starts its diagram there)."""
+    from bokeh.document.events import MessageSentEvent
+    from bokeh.events import DocumentReady
+
+    conn = session._connection
+    event = MessageSentEvent(session.document, "bokeh_event", DocumentReady())
+    conn._loop.add_callback(conn.send_message, conn._protocol.create("PATCH-DOC", [event]))
+
+
+def pump(session, predicate, timeout: float = 30.0) -> bool:
+    """Run the session's client loop (applying the server's patches to
+    ``session.document``) until ``predicate()`` holds or ``timeout`` passes.
+
+    The client loop only looks at the predicate after a message arrives, so a light
+    server-info request is sent every 0.25 s while waiting."""
+    conn = session._connection
+    loop = conn._loop
+    deadline = time.monotonic() + timeout
+    pinging = {"on": True}
+
+    def ping():
+        if pinging["on"] and conn.connected:
+            loop.add_callback(conn.send_message, conn._protocol.create("SERVER-INFO-REQ"))
+            loop.call_later(0.25, ping)
+
+    result = {"ok": False}
+
+    def until():
+        if predicate():
+            result["ok"] = True
+            return True
+        return time.monotonic() > deadline or not conn.connected
+
+    loop.add_callback(ping)
+    conn._loop_until(until)
+    pinging["on"] = False
+    return result["ok"]
+
+
+def by_class(doc, css_class: str):
+    for m in doc.models:
+        if css_class in (getattr(m, "css_classes", None) or []):
+            return m
+    raise KeyError(css_class)
+
+
+def slider(doc, name: str):
+    """The Bokeh Slider model inside the app's editable slider for setting ``name``."""
+    box = by_class(doc, f"ie-w-{name}")
+    for child in getattr(box, "children", []):
+        if type(child).__name__ == "Slider":
+            return child
+    raise KeyError(name)
+
+
+def value_input(doc, name: str):
+    """The input model of setting ``name``: the numeric input of an editable slider, or
+    the FloatInput/IntInput/Select itself."""
+    box = by_class(doc, f"ie-w-{name}")
+    if hasattr(box, "value"):
+        return box
+    for m in box.references():
+        if type(m).__name__ in ("Spinner", "NumericInput"):
+            return m
+    raise KeyError(name)
+
+
+def message_text(doc) -> str:
+    """The visible text of the app's message box ('' when hidden)."""
+    import html
+
+    box = by_class(doc, "ie-message")
+    if not box.visible:
+        return ""
+    # the model holds escaped HTML ("&lt;p&gt;...") of the escaped message text
+    return html.unescape(re.sub(r"<[^>]+>", "", html.unescape(box.text or ""))).strip()
+
+
+def source(doc, name: str):
+    return doc.get_model_by_name(name).data_source
