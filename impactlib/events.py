@@ -19,7 +19,8 @@ from __future__ import annotations
 import math
 
 from ._jit import jit
-from .flight import C_, G, K, M, OM, R, derivative_bounds, flight_state, release_time, wall_force
+from .flight import (C_, CPH, G, H0, HV0, K, M, OM, R, SPH, V0, W0SQ, X0, derivative_bounds,
+                     flight_state, release_time, wall_force)
 
 EPS = 2.220446049250313e-16
 
@@ -91,7 +92,49 @@ def safe_step(f, f1, f2, m3, hmax):
         return hmax
     if start == 0.0 and f <= 0.0:
         return 0.0
+    if start * m3 >= f2:
+        # p is concave on [start, hmax]: Newton from the right end never passes the root
+        x = hmax
+        for _ in range(12):
+            dp = f1 + x * (f2 - 0.5 * m3 * x)
+            if dp >= 0.0:
+                break
+            x_new = x - _lower_cubic(f, f1, f2, m3, x) / dp
+            if x_new >= x * (1.0 - 1e-7):
+                x = x_new
+                break
+            x = x_new
+        x *= 1.0 - 1e-6
+        if start < x < hmax and _lower_cubic(f, f1, f2, m3, x) > 0.0:
+            return x
     return _bisect_cubic(f, f1, f2, m3, start, hmax)
+
+
+@jit
+def _newton_in_bracket(sp, seg, lo, hi, flo, vlo, g, t0):
+    """The root of f = x - g in [lo, hi], where f(lo) > 0 >= f(hi) and f decreases.
+
+    Returns (s, v, evaluations).
+    """
+    s = lo - flo / vlo
+    v = vlo
+    n = 0
+    for _ in range(60):
+        if not (lo < s < hi):
+            s = 0.5 * (lo + hi)
+        x, v, a, j, rh, xs = flight_state(sp, seg, s)
+        n += 1
+        f = x - g
+        if f > 0.0:
+            lo = s
+        else:
+            hi = s
+        step = -f / v if v < 0.0 else 0.5 * (lo + hi) - s
+        if abs(step) <= 2.0 * EPS * (t0 + s) or hi - lo <= 2.0 * EPS * (t0 + s):
+            s = min(max(s + step, lo), hi)
+            break
+        s = s + step
+    return s, min(v, 0.0), n
 
 
 @jit
@@ -110,11 +153,16 @@ def next_impact(sp, seg, s_end, hmax, max_steps):
         Closed-form evaluations spent.
     """
     g = sp[G]
-    x, v, a, j, rh, xs = flight_state(sp, seg, 0.0)
-    x = seg[7]
-    v = seg[8]
+    # the start state and its derivatives from Eq. (1) itself, without a closed-form call
+    x = seg[X0]
+    v = seg[V0]
+    m = sp[M]
+    a = (seg[CPH] - 2.0 * sp[C_] * v - sp[K] * x) / m
+    j = (-sp[OM] * seg[SPH] - 2.0 * sp[C_] * a - sp[K] * v) / m
+    rh = math.sqrt(seg[HV0] * seg[HV0] + sp[W0SQ] * seg[H0] * seg[H0])
+    xs = abs(x)
     s = 0.0
-    nsteps = 1
+    nsteps = 0
     if x - g <= 0.0 and v == 0.0:
         # at rest on the wall with a non-negative push: leave as tau^2 (a > 0) or tau^3 (a = 0)
         # the caller has decided the mass leaves (force >= 0); a < 0 here is rounding
@@ -151,6 +199,16 @@ def next_impact(sp, seg, s_end, hmax, max_steps):
             return IMPACT, s, min(v, 0.0), nsteps
         h = min(hmax, s_end - s)
         m3, m4 = derivative_bounds(sp, rh, s + h)
+        if v < 0.0:
+            # v stays negative while its upper bound v + a tau + m3 tau^2 / 2 does, so f
+            # decreases strictly there; if f's upper bound is <= 0 by then, the first
+            # root is the only one in the bracket: finish with safeguarded Newton
+            sq = math.sqrt(a * a - 2.0 * m3 * v)
+            tv = -2.0 * v / (a + sq) if a >= 0.0 else (sq - a) / m3
+            tv = min(tv, h)
+            if f + tv * (v + tv * (0.5 * a + tv * m3 / 6.0)) <= 0.0:
+                s, vh, ns = _newton_in_bracket(sp, seg, s, s + tv, x - g, v, g, t0)
+                return IMPACT, s, vh, nsteps + ns
         tau = safe_step(max(f, 0.0), v, a, m3, h)
         if tau <= 4.0 * EPS * (t0 + s):
             # touching the wall at rest (tangency within rounding): a contact, v ~ 0

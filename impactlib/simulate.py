@@ -9,11 +9,12 @@ import numpy as np
 
 from ._jit import jit
 from .events import FLY, IMPACT, NO_IMPACT, STEP_LIMIT, STICK, impact_outcome, next_impact
-from .flight import G, R, flight_state, release_time, start_segment, system_constants, wall_force
+from .flight import G, R, RES, flight_state, release_time, start_segment, system_constants, wall_force
 from .integrators import advance_rk4, advance_rk45
 from .model import Params, RunLimits, check_run
 
 METHOD_IDS = {"exact": 0, "rk4": 1, "rk45": 2}
+HMAX_PERIODS = 0.5        # longest certified step, in forcing periods (1/4 at resonance)
 TAIL_TOL = 1e-6          # a chatter is summed once one hop lasts under this many time scales
 
 # run status codes (Solution.status)
@@ -238,7 +239,7 @@ def section_times(t_record, t_end, phase, period):
 def run_constants(p: Params):
     sp = system_constants(p.m, p.c, p.k, p.g, p.r, p.omega)
     rate = p.rate()
-    hmax = 0.25 * p.T
+    hmax = (0.25 if sp[RES] else HMAX_PERIODS) * p.T
     return sp, rate, hmax
 
 

@@ -94,7 +94,8 @@ def test_chatter_ends_where_the_stepped_reference_ends():
     # the summed tail hid only slow impacts: every reference impact faster than the last
     # recorded one is matched, to the time a hop of that speed is known in float64
     # (eps X / |v|: up to ~1e-9 at the slowest recorded impacts)
-    fast = np.abs(R.v) >= v_last
+    # (the slowest matched pair itself differs at rounding level: compare with a margin)
+    fast = np.abs(R.v) >= v_last * (1 - 1e-6)
     assert fast.sum() == sol.impacts.t.size
     err = np.abs(sol.impacts.t - R.t[fast])
     assert np.all(err <= 1e-11 + 8 * EPS * X / np.abs(R.v[fast]))
