@@ -113,10 +113,12 @@ class Served:
                 self.proc.wait(10)
 
 
-def websocket_status(port: int, origin: str | None, path: str = "/app/ws") -> int:
-    """HTTP status of a websocket upgrade request sent with this Origin header."""
+def websocket_status(port: int, origin: str | None, path: str = "/app/ws",
+                     host: str | None = None) -> int:
+    """HTTP status of a websocket upgrade request sent with this Origin (and Host)
+    header: 101 switches protocols, 403 is Bokeh refusing the origin."""
     key = base64.b64encode(os.urandom(16)).decode()
-    lines = [f"GET {path} HTTP/1.1", f"Host: localhost:{port}", "Upgrade: websocket",
+    lines = [f"GET {path} HTTP/1.1", f"Host: {host or f'localhost:{port}'}", "Upgrade: websocket",
              "Connection: Upgrade", f"Sec-WebSocket-Key: {key}", "Sec-WebSocket-Version: 13"]
     if origin is not None:
         lines.append(f"Origin: {origin}")
