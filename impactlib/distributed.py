@@ -26,7 +26,7 @@ import time
 import numpy as np
 
 from .model import Params
-from .sweeps import (CAP_PER_VALUE, Bifurcation, RegimeMap, _check_sweep, _concat,
+from .sweeps import (CAP_PER_VALUE, Bifurcation, RegimeMap, _check_sweep, merge_parts,
                      _values_array, bifurcation as _local_bifurcation,
                      regime_map as _local_regime_map)
 
@@ -110,20 +110,22 @@ def bifurcation(client, p: Params, name: str, values, t_end: float = 500.0,
         futs = client.map(_bifurcation_task, [p] * len(directions), [name] * len(directions),
                           [values] * len(directions),
                           [dict(kwargs, warm_start=d) for d in directions], pure=False)
-        parts = client.gather(futs)
-        return _concat(name, values, parts, time.perf_counter() - tic)
+        whole = np.arange(values.size)
+        parts = [(whole, b.status, b.n_impacts, _row_arrays(b, 0))
+                 for b in client.gather(futs)]
+        return merge_parts(name, values, parts, time.perf_counter() - tic)
     size = int(chunk) if chunk else _default_chunk(client, values.size, 16)
     edges = _edges(values.size, size)
     futs = client.map(_bifurcation_task, [p] * len(edges), [name] * len(edges),
                       [values[a:b] for a, b in edges], [kwargs] * len(edges), pure=False)
-    parts = []
-    for (a, _), part in zip(edges, client.gather(futs)):
-        # each task numbered its values from 0: shift to positions in the full array
-        parts.append(Bifurcation(name=name, values=values, param=part.param, v=part.v,
-                                 t=part.t, phase=part.phase, index=part.index + a,
-                                 direction=part.direction, status=part.status,
-                                 n_impacts=part.n_impacts, elapsed=0.0))
-    return _concat(name, values, parts, time.perf_counter() - tic)
+    # each task numbered its values from 0: shift to positions in the full array
+    parts = [(np.arange(a, b), part.status, part.n_impacts, _row_arrays(part, a))
+             for (a, b), part in zip(edges, client.gather(futs))]
+    return merge_parts(name, values, parts, time.perf_counter() - tic)
+
+
+def _row_arrays(b: Bifurcation, offset: int):
+    return b.param, b.v, b.t, b.phase, b.index + offset, b.direction
 
 
 def regime_map(client, p: Params, name_x: str, values_x, name_y: str, values_y,

@@ -38,26 +38,31 @@ RESONANCE_RTOL = 16 * 2.220446049250313e-16
 
 def system_constants(m, c, k, g, r, omega):
     """Pack the constants of Eq. (1) used by every kernel (Python side, once per run)."""
-    sp = np.zeros(NSP)
-    sp[M], sp[C_], sp[K], sp[G], sp[R], sp[OM] = m, c, k, g, r, omega
+    return system_constants_rows(*(np.array([v], dtype=np.float64) for v in (m, c, k, g, r, omega)))[0]
+
+
+def system_constants_rows(m, c, k, g, r, omega):
+    """system_constants for arrays of parameters: one row of ``sp`` per entry."""
+    n = m.shape[0]
+    sp = np.zeros((n, NSP))
+    sp[:, M], sp[:, C_], sp[:, K], sp[:, G], sp[:, R], sp[:, OM] = m, c, k, g, r, omega
     alpha = c / m
     w0sq = k / m
     q = (k * m - c * c) / (m * m)
-    sp[ALPHA], sp[W0SQ], sp[Q_] = alpha, w0sq, q
-    sp[SQ] = math.sqrt(abs(q))
-    if q < 0:
-        b = sp[SQ]
-        sp[LAM1] = -w0sq / (alpha + b)
-        sp[LAM2] = -(alpha + b)
-    detune = k - m * omega * omega
-    if c == 0.0 and abs(detune) <= RESONANCE_RTOL * max(k, m * omega * omega):
-        sp[RES] = 1.0
-        sp[FA] = 1.0 / (2.0 * m * omega)
-    else:
+    sp[:, ALPHA], sp[:, W0SQ], sp[:, Q_] = alpha, w0sq, q
+    b = np.sqrt(np.abs(q))
+    sp[:, SQ] = b
+    over = q < 0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        sp[:, LAM1] = np.where(over, -w0sq / (alpha + b), 0.0)
+        sp[:, LAM2] = np.where(over, -(alpha + b), 0.0)
+        detune = k - m * omega * omega
+        res = (c == 0.0) & (np.abs(detune) <= RESONANCE_RTOL * np.maximum(k, m * omega * omega))
         d = detune * detune + (2.0 * c * omega) ** 2
-        sp[PP] = detune / d
-        sp[QQ] = 2.0 * c * omega / d
-        sp[FA] = math.hypot(sp[PP], sp[QQ])
+        sp[:, RES] = res
+        sp[:, PP] = np.where(res, 0.0, detune / d)
+        sp[:, QQ] = np.where(res, 0.0, 2.0 * c * omega / d)
+    sp[:, FA] = np.where(res, 1.0 / (2.0 * m * omega), np.hypot(sp[:, PP], sp[:, QQ]))
     return sp
 
 

@@ -121,9 +121,20 @@ class Params:
 
     def rate(self) -> float:
         """Fastest rate of the linear flow plus forcing, 1/s (sets step and tolerance scales)."""
-        a = self.c / self.m
-        lam = a + math.sqrt(abs(a * a - self.k / self.m)) if a * a > self.k / self.m else math.sqrt(self.k / self.m)
-        return max(lam, self.omega, a)
+        return float(fastest_rate(self.m, self.c, self.k, self.omega))
+
+
+def flow_rate(m, c, k):
+    """Largest |eigenvalue| of the unforced linear flow (arrays or scalars), 1/s."""
+    m, c, k = (np.asarray(v, dtype=np.float64) for v in (m, c, k))
+    a = c / m
+    w0sq = k / m
+    return np.where(a * a > w0sq, a + np.sqrt(np.abs(a * a - w0sq)), np.sqrt(w0sq))
+
+
+def fastest_rate(m, c, k, omega):
+    """Fastest rate of the linear flow and the forcing (arrays or scalars), 1/s."""
+    return np.maximum(np.maximum(flow_rate(m, c, k), omega), np.asarray(c) / m)
 
 
 @dataclass(frozen=True)
@@ -138,12 +149,7 @@ class RunLimits:
 def rk4_stability_limit(p: Params) -> float:
     """Largest stable RK4 step for the linear flow: |h lambda| <= 2.78 on the real axis,
     2.83 on the imaginary axis; 2.78 is used for every direction (conservative)."""
-    a = p.c / p.m
-    w0sq = p.k / p.m
-    if a * a > w0sq:
-        lam = a + math.sqrt(a * a - w0sq)
-    else:
-        lam = math.sqrt(w0sq)
+    lam = float(flow_rate(p.m, p.c, p.k))
     return math.inf if lam == 0 else 2.78 / lam
 
 

@@ -237,6 +237,7 @@ def section_times(t_record, t_end, phase, period):
 
 
 def run_constants(p: Params):
+    """(sp, rate, hmax) of one run; sweeps.py builds the same for many rows at once."""
     sp = system_constants(p.m, p.c, p.k, p.g, p.r, p.omega)
     rate = p.rate()
     hmax = (0.25 if sp[RES] else HMAX_PERIODS) * p.T

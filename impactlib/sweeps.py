@@ -18,10 +18,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from ._jit import jit
-from .flight import NSP
+from .flight import RES, system_constants_rows
 from .classify import MAX_PERIOD, PERIOD_RTOL, describe, motion_class
-from .model import PARAM_NAMES, Params, RunLimits, check_run
-from .simulate import METHOD_IDS, run_constants, run_kernel
+from .model import PARAM_NAMES, Params, RunLimits, check_run, fastest_rate, flow_rate
+from .simulate import HMAX_PERIODS, METHOD_IDS, run_kernel
 
 CAP_PER_VALUE = 4096        # impacts kept per value; more are counted, flagged in status
 _POOL_LOCK = threading.Lock()
@@ -70,10 +70,10 @@ def _section_times(t_lo, t_hi, period):
 
 
 @jit
-def sweep_kernel(sps, method, x0, v0, t_end, t_record, hmaxs, rates, dt, rtol, atol,
+def sweep_kernel(sps, method, x0s, v0, t_end, t_record, hmaxs, rates, dt, rtol, atol,
                  out_t, out_v, counts, status, finals, classes, classify, warm,
                  max_impacts, max_steps):
-    """Run each row of sps in turn (see run_kernel); results into the out arrays.
+    """Run each row of sps in turn from x0s[i] (see run_kernel); results into the out arrays.
 
     classes[i] = (m, n) codes when classify; finals[i] = (t, x, v, stuck) at the end.
     With warm, value i starts from value i-1's final state, at the time t0 in [0, T_i)
@@ -82,12 +82,14 @@ def sweep_kernel(sps, method, x0, v0, t_end, t_record, hmaxs, rates, dt, rtol, a
     nvals = sps.shape[0]
     empty = np.empty(0)
     stick = np.empty((0, 2))
-    x, v, t0 = x0, v0, 0.0
+    x, v, t0 = x0s[0], v0, 0.0
     for i in range(nvals):
         sp = sps[i]
         om = sp[5]
         period = 2.0 * math.pi / om
-        if warm and i > 0:
+        if not warm:
+            x = x0s[i]
+        elif i > 0:
             x = finals[i - 1, 1]
             v = finals[i - 1, 2]
             ph = sps[i - 1, 5] * finals[i - 1, 0]
@@ -180,33 +182,37 @@ def _values_array(name, values):
     return arr
 
 
-def _param_rows(p, assignments, method, dt, x0):
-    """System constants for each parameter assignment (validated), plus step scales."""
-    n = len(assignments)
-    sps = np.empty((n, NSP))
-    hmaxs = np.empty(n)
-    rates = np.empty(n)
+def _param_rows(p, columns, method, dt, x0):
+    """System constants, step caps and rates for each row of parameter ``columns``
+    (name -> array of one length).  Every constraint on a single parameter is an
+    interval, so checking each column's extremes validates every row."""
     problems = []
-    for i, changes in enumerate(assignments):
-        try:
-            q = p.replace(**changes)
-        except ValueError as err:
-            problems.append(f"{changes}: {err}")
-            if len(problems) >= 5:
-                break
-            continue
-        if method == "rk4":
-            check_run(q, t_end=1.0, t_record=0.0, x0=None, v0=0.0, phase=0.0, method=method,
-                      dt=dt, rtol=1e-6, atol=1e-9, dense=0, limits=RunLimits())
-        if x0 is not None and x0 < q.g:
-            problems.append(f"{changes}: x0={x0!r} is behind the endstop g={q.g!r}")
-        sps[i], rates[i], hmaxs[i] = run_constants(q)
+    for name, vals in columns.items():
+        for v in (vals.min(), vals.max()):
+            try:
+                p.replace(**{name: float(v)})
+            except ValueError as err:
+                problems.append(str(err).removeprefix("invalid parameters: "))
+    n = len(next(iter(columns.values())))
+    full = {f: np.broadcast_to(np.asarray(columns.get(f, getattr(p, f)), dtype=np.float64), (n,))
+            for f in PARAM_NAMES}
+    if x0 is not None and x0 < full["g"].max():
+        problems.append(f"x0={x0!r} is behind the endstop g={full['g'].max()!r}")
+    if method == "rk4" and not problems:
+        lam = flow_rate(full["m"], full["c"], full["k"])
+        worst = int(np.argmax(lam))
+        if dt * lam[worst] > 2.78:
+            problems.append(f"dt={dt!r} exceeds the RK4 stability limit {2.78 / lam[worst]:.4g} at "
+                            + ", ".join(f"{k}={v[worst]!r}" for k, v in columns.items()))
     if problems:
-        raise ValueError("invalid sweep values: " + "; ".join(problems))
+        raise ValueError("invalid sweep values: " + "; ".join(dict.fromkeys(problems)))
+    sps = system_constants_rows(*(np.ascontiguousarray(full[f]) for f in PARAM_NAMES))
+    rates = fastest_rate(full["m"], full["c"], full["k"], full["omega"])
+    hmaxs = np.where(sps[:, RES] != 0.0, 0.25, HMAX_PERIODS) * 2.0 * math.pi / full["omega"]
     return sps, hmaxs, rates
 
 
-def _run_rows(sps, hmaxs, rates, method, x0, v0, t_end, t_record, dt, rtol, atol, classify,
+def _run_rows(sps, hmaxs, rates, method, x0s, v0, t_end, t_record, dt, rtol, atol, classify,
               warm, cap, max_impacts, max_steps):
     n = sps.shape[0]
     out_t = np.empty((n, cap))
@@ -215,7 +221,7 @@ def _run_rows(sps, hmaxs, rates, method, x0, v0, t_end, t_record, dt, rtol, atol
     status = np.zeros(n, dtype=np.int64)
     finals = np.zeros((n, 4))
     classes = np.zeros((n, 2), dtype=np.int64)
-    sweep_kernel(sps, METHOD_IDS[method], x0, v0, t_end, t_record, hmaxs, rates,
+    sweep_kernel(sps, METHOD_IDS[method], np.ascontiguousarray(x0s, dtype=np.float64), v0, t_end, t_record, hmaxs, rates,
                  0.0 if dt is None else dt, rtol, atol, out_t, out_v, counts, status, finals,
                  classes, classify, warm, max_impacts, max_steps)
     return out_t, out_v, counts, status, finals, classes
@@ -226,16 +232,14 @@ def _split(n, parts):
     return [(a, b) for a, b in zip(edges[:-1], edges[1:]) if b > a]
 
 
-def _collect(name, values, order, T_of, out_t, out_v, counts, status, direction, elapsed):
+def _rows(values, order, T_of, out_t, out_v, counts, direction):
+    """Row arrays (param, v, t, phase, index, direction) of runs of values[order]."""
     kept = np.minimum(counts, out_t.shape[1])
     idx = np.repeat(np.arange(len(kept)), kept)
     mask = np.arange(out_t.shape[1])[None, :] < kept[:, None]
     t = out_t[mask]
-    periods = T_of[idx]
-    return Bifurcation(name=name, values=values, param=values[order][idx], v=out_v[mask], t=t,
-                       phase=np.mod(t, periods), index=order[idx],
-                       direction=np.full(idx.shape, direction, dtype=np.int8),
-                       status=status, n_impacts=counts, elapsed=elapsed)
+    return (values[order][idx], out_v[mask], t, np.mod(t, T_of[order][idx]), order[idx],
+            np.full(idx.shape, direction, dtype=np.int8))
 
 
 def bifurcation(p: Params, name: str, values, t_end: float = 500.0, t_record: float = 250.0,
@@ -254,78 +258,80 @@ def bifurcation(p: Params, name: str, values, t_end: float = 500.0, t_record: fl
     values : array_like
     t_end, t_record : float
         Each run lasts t_end and keeps impacts after t_record.
+    x0, v0 : float
+        Start of every run (x0 defaults to max(0, g), per value when sweeping g).
     warm_start : False, "up", "down" or "both"
-        False: every value starts from (x0, v0) at rest (independent, run in parallel).
-        "up"/"down": values sorted, each starting where the previous ended (continuation,
-        exposes hysteresis); "both" runs up and down, rows tagged by ``direction``.
+        False: every value starts from (x0, v0) (independent runs, in parallel).
+        "up"/"down": values sorted, each run starting where the previous one ended, at the
+        same forcing phase (continuation: exposes hysteresis and coexisting attractors);
+        "both" runs up and down at once, rows tagged by ``direction``.
     workers : int
-        Threads; default all cores.
+        Threads; default all cores (the pool is shared by all callers in the process).
+    cap_per_value : int
+        Impacts kept per value; more are counted in ``n_impacts`` and flagged (status 3).
 
     Returns
     -------
     Bifurcation
+        Rows sorted by value index (then direction, then time); ``status`` and
+        ``n_impacts`` aligned with ``values`` (worst status and total over directions).
     """
     t_end, t_record, x0c, v0, _, dt, rtol, atol = _check_sweep(
         p, [name], t_end, t_record, x0, v0, method, dt, rtol, atol)
     values = _values_array(name, values)
     if warm_start not in (False, True, "up", "down", "both"):
         raise ValueError(f"warm_start={warm_start!r} must be False, 'up', 'down' or 'both'")
-    x_start = max(0.0, p.g) if x0 is None else x0c
     tic = time.perf_counter()
     ex = _executor(workers)
-    sps, hmaxs, rates = _param_rows(p, [{name: v} for v in values], method, dt, x0)
+    n = values.size
+    sps, hmaxs, rates = _param_rows(p, {name: values}, method, dt, x0)
     T_of = 2 * math.pi / sps[:, 5]
+    if x0 is not None:
+        x0s = np.full(n, x0c)
+    elif name == "g":
+        x0s = np.maximum(0.0, values)
+    else:
+        x0s = np.full(n, max(0.0, p.g))
     common = dict(method=method, v0=v0, t_end=t_end, t_record=t_record, dt=dt, rtol=rtol,
                   atol=atol, classify=False, cap=cap_per_value, max_impacts=max_impacts,
                   max_steps=max_steps)
+    jobs = []
     if warm_start:
-        directions = {"up": [1], True: [1], "down": [-1], "both": [1, -1]}[warm_start]
         srt = np.argsort(values, kind="stable")
-        jobs = []
-        for d in directions:
+        for d in {"up": [1], True: [1], "down": [-1], "both": [1, -1]}[warm_start]:
             order = srt if d > 0 else srt[::-1]
-            x_first = x_start if x0 is not None or name != "g" else max(0.0, values[order[0]])
-            jobs.append((d, order, ex.submit(
-                _run_rows, sps[order], hmaxs[order], rates[order], x0=x_first, warm=True,
-                **common)))
-        parts = []
-        for d, order, fut in jobs:
-            out_t, out_v, counts, status, _, _ = fut.result()
-            parts.append(_collect(name, values, order, T_of[order], out_t, out_v, counts, status,
-                                  d, 0.0))
-        elapsed = time.perf_counter() - tic
-        return _concat(name, values, parts, elapsed)
-    order = np.arange(values.size)
-    nw = workers or worker_count()
-    chunks = _split(values.size, max(nw, int(math.ceil(values.size / 256))))
-    futs = []
-    for a, b in chunks:
-        sl = slice(a, b)
-        if name == "g" and x0 is None:
-            # each wall position starts at rest on its own wall (or at 0 for a gap)
-            futs.append([ex.submit(_run_rows, sps[i:i + 1], hmaxs[i:i + 1], rates[i:i + 1],
-                                        x0=max(0.0, values[i]), warm=False, **common)
-                         for i in range(a, b)])
-        else:
-            futs.append([ex.submit(_run_rows, sps[sl], hmaxs[sl], rates[sl], x0=x_start,
-                                        warm=False, **common)])
+            jobs.append((d, order, ex.submit(_run_rows, sps[order], hmaxs[order], rates[order],
+                                             x0s=x0s[order], warm=True, **common)))
+    else:
+        # interleaved chunks spread the costly values (chatter) evenly over the threads
+        nchunks = min(n, max(4 * (workers or worker_count()), int(math.ceil(n / 128))))
+        for j in range(nchunks):
+            order = np.arange(j, n, nchunks)
+            jobs.append((0, order, ex.submit(_run_rows, sps[order], hmaxs[order], rates[order],
+                                             x0s=x0s[order], warm=False, **common)))
     parts = []
-    for (a, b), fl in zip(chunks, futs):
-        res = [f.result() for f in fl]
-        out_t = np.concatenate([r[0] for r in res])
-        out_v = np.concatenate([r[1] for r in res])
-        counts = np.concatenate([r[2] for r in res])
-        status = np.concatenate([r[3] for r in res])
-        parts.append(_collect(name, values, order[a:b], T_of[a:b], out_t, out_v, counts, status,
-                              0, 0.0))
-    return _concat(name, values, parts, time.perf_counter() - tic)
+    for d, order, fut in jobs:
+        out_t, out_v, counts, st, _, _ = fut.result()
+        parts.append((order, st, counts, _rows(values, order, T_of, out_t, out_v, counts, d)))
+    return merge_parts(name, values, parts, time.perf_counter() - tic)
 
 
-def _concat(name, values, parts, elapsed):
-    cat = lambda f: np.concatenate([getattr(b, f) for b in parts])  # noqa: E731
-    return Bifurcation(name=name, values=values, param=cat("param"), v=cat("v"), t=cat("t"),
-                       phase=cat("phase"), index=cat("index"), direction=cat("direction"),
-                       status=cat("status"), n_impacts=cat("n_impacts"), elapsed=elapsed)
+def merge_parts(name, values, parts, elapsed) -> Bifurcation:
+    """One Bifurcation from parts (positions in values, status, n_impacts, row arrays):
+    rows sorted by value index, then direction (up first), then time; per-value status the
+    worst and n_impacts the total over the parts that ran that value."""
+    n = values.size
+    status = np.zeros(n, dtype=np.int64)
+    n_impacts = np.zeros(n, dtype=np.int64)
+    for order, st, counts, _ in parts:
+        np.maximum.at(status, order, st)
+        np.add.at(n_impacts, order, counts)
+    cols = [np.concatenate(c) for c in zip(*(rows for *_, rows in parts))]
+    k = np.lexsort((cols[2], -cols[5], cols[4]))
+    param, v, t, phase, index, direction = (c[k] for c in cols)
+    return Bifurcation(name=name, values=values, param=param, v=v, t=t, phase=phase,
+                       index=index, direction=direction, status=status, n_impacts=n_impacts,
+                       elapsed=elapsed)
 
 
 def iter_bifurcation(p: Params, name: str, values, chunk: int = 64, **kwargs):
@@ -356,20 +362,19 @@ def regime_map(p: Params, name_x: str, values_x, name_y: str, values_y,
     vx = _values_array(name_x, values_x)
     vy = _values_array(name_y, values_y)
     tic = time.perf_counter()
-    x_start = max(0.0, p.g) if x0 is None else x0c
+    x_start = x0c
     impacts = np.zeros((vy.size, vx.size), dtype=np.int64)
     period = np.zeros_like(impacts)
     status = np.zeros_like(impacts)
 
     def task(iy0, iy1):
         for iy in range(iy0, iy1):
-            sps, hmaxs, rates = _param_rows(p, [{name_x: a, name_y: vy[iy]} for a in vx],
+            sps, hmaxs, rates = _param_rows(p, {name_x: vx, name_y: np.full(vx.size, vy[iy])},
                                             method, dt, x0)
-            xs = x_start
-            if x0 is None and "g" in (name_x, name_y):
-                xs = max(0.0, vy[iy]) if name_y == "g" else max(0.0, float(np.max(vx)))
+            # each cell starts at x0, or at rest on its own wall (max(0, g))
+            x0s = np.full(vx.size, x_start) if x0 is not None else np.maximum(0.0, sps[:, 3])
             _, _, _, st, _, cls = _run_rows(
-                sps, hmaxs, rates, method=method, x0=xs, v0=v0, t_end=t_end,
+                sps, hmaxs, rates, method=method, x0s=x0s, v0=v0, t_end=t_end,
                 t_record=t_record, dt=dt, rtol=rtol, atol=atol, classify=True, warm=False,
                 cap=512, max_impacts=max_impacts, max_steps=max_steps)
             impacts[iy], period[iy], status[iy] = cls[:, 0], cls[:, 1], st
