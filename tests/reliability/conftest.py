@@ -10,11 +10,13 @@ from __future__ import annotations
 import os
 
 import pytest
-from hypothesis import HealthCheck, settings
+from hypothesis import HealthCheck, Phase, settings
 
+# no "explain" phase: it reruns a failing case hundreds of times (minutes on 2 cores)
 _COMMON = dict(deadline=None, print_blob=True,
+               phases=[Phase.explicit, Phase.reuse, Phase.generate, Phase.target, Phase.shrink],
                suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
-settings.register_profile("reliability-ci", max_examples=25, **_COMMON)
+settings.register_profile("reliability-ci", max_examples=50, **_COMMON)
 settings.register_profile("reliability-thorough", max_examples=400, **_COMMON)
 settings.register_profile(
     "reliability",
