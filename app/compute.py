@@ -21,8 +21,11 @@ SCENE_POINTS = 4000
 MAX_CORNERS = 2000
 #: At most this many points in the impact map and the Poincare map.
 MAX_MAP_POINTS = 20_000
-#: Ceiling on the wall time of one scene simulation (the core stops with partial results).
+#: Ceilings of one scene simulation; reaching one gives partial results and a message
+#: (wall time only if the core supports it).
 SCENE_WALL_TIME = 2.0
+SCENE_MAX_IMPACTS = 50_000
+SCENE_MAX_STEPS = 10_000_000
 
 _HASH = {il.Params: lambda p: repr(p).encode()}
 _SIMULATE_ARGS = frozenset(inspect.signature(il.simulate).parameters)
@@ -40,7 +43,8 @@ def simulate(key: tuple, dense: int, phase: float) -> il.Solution:
     """``il.simulate`` for ``Run.scene_key()``; cached across sessions."""
     params, t_end, t_record, x0, v0, method, dt, rtol, atol = key
     kw = dict(t_end=t_end, t_record=t_record, x0=x0, v0=v0, method=method, dense=dense,
-              phase=phase, wall_time=SCENE_WALL_TIME)
+              phase=phase, wall_time=SCENE_WALL_TIME, max_impacts=SCENE_MAX_IMPACTS,
+              max_steps=SCENE_MAX_STEPS)
     if method == "rk4":
         kw["dt"] = dt
     elif method == "rk45":

@@ -1,8 +1,10 @@
 """The live bifurcation diagram: computed off the event loop, streamed, cancellable.
 
 One worker thread per server process runs diagram chunks for every session in FIFO
-order. A session's diagram is split into interleaved chunks (every n-th omega value),
-so the whole omega range fills in coarse-to-fine and the first points appear at once.
+order (each chunk uses all cores through the core's parallel sweep). A session's
+diagram is split into chunks of interleaved omega values, so the whole range fills in
+coarse-to-fine and the first points appear at once; chunk sizes adapt to the measured
+cost so that slow parameter sets still stream and cancel within a fraction of a second.
 Each chunk is a separate job, so sessions take turns and nobody waits for a whole
 diagram of someone else. Restarting bumps a generation number: queued chunks of the
 old generation are dropped before they run, and results that arrive late are ignored.
@@ -24,9 +26,14 @@ from .state import Run
 
 log = logging.getLogger(__name__)
 
-#: Chunks per diagram (values are interleaved across chunks). Every chunk makes the
-#: browser redraw the diagram, so a few are better than many.
-N_CHUNKS = 4
+#: Adaptive chunks: the first holds FIRST_CHUNK values (spread over the whole range);
+#: later ones are sized from the measured rate to take about CHUNK_SECONDS, and hold at
+#: most a quarter of the values (each chunk makes the browser redraw the diagram).
+FIRST_CHUNK = 4
+CHUNK_SECONDS = 0.25
+#: Ceilings: wall time of one diagram, impacts simulated per omega value.
+DIAGRAM_WALL_TIME = 20.0
+DIAGRAM_MAX_IMPACTS = 20_000
 #: Points of one omega value closer than this fraction of the largest |v| are drawn once
 #: (a period-1 orbit is one dot, not a hundred dots on top of each other).
 DRAW_RESOLUTION = 1e-3
@@ -40,10 +47,10 @@ def omega_values(run: Run) -> np.ndarray:
     return np.linspace(run.bif_min, run.bif_max, run.bif_n)
 
 
-def chunk_values(values: np.ndarray, n_chunks: int = N_CHUNKS) -> list[np.ndarray]:
-    """Interleaved chunks: chunk j holds values[j::n] (the first chunk spans the range)."""
-    n = max(1, min(n_chunks, values.size))
-    return [np.ascontiguousarray(values[j::n]) for j in range(n)]
+def interleaved(values: np.ndarray, stride: int = 16) -> np.ndarray:
+    """values[0::s], values[1::s], ...: every prefix spreads over the whole range, so
+    the diagram fills in coarse to fine."""
+    return np.concatenate([values[j::stride] for j in range(min(stride, values.size))])
 
 
 def drawn(omega: np.ndarray, v: np.ndarray) -> np.ndarray:
@@ -61,7 +68,8 @@ def compute_chunk(run: Run, values: np.ndarray) -> dict:
     parallel sweep; at most MAX_IMPACTS_PER_VALUE impacts kept per value."""
     bif = il.bifurcation(run.params, "omega", values, t_end=run.t_end,
                          t_record=run.t_record, method="exact", x0=run.x0, v0=run.v0,
-                         warm_start=False, cap_per_value=MAX_IMPACTS_PER_VALUE)
+                         warm_start=False, cap_per_value=MAX_IMPACTS_PER_VALUE,
+                         max_impacts=DIAGRAM_MAX_IMPACTS)
     status = np.asarray(bif.status)
     omega, v = np.asarray(bif.param, dtype=float), np.asarray(bif.v, dtype=float)
     return {"omega": omega, "v": v,
@@ -78,7 +86,7 @@ class DiagramRunner:
 
     def __init__(self, dispatch: Callable[[Callable[[], None]], None],
                  on_chunk: Callable[[int, dict, int, int], None],
-                 on_done: Callable[[int, float, int], None],
+                 on_done: Callable[[int, dict], None],
                  on_error: Callable[[int, str], None]):
         self._dispatch = dispatch
         self._on_chunk = on_chunk
@@ -104,41 +112,48 @@ class DiagramRunner:
             self._gen += 1
             gen = self._gen
         self.done.clear()
-        chunks = chunk_values(omega_values(run))
-        self._submit(gen, run, chunks, 0, time.perf_counter(), 0)
+        job = _Job(gen, run, interleaved(omega_values(run)), time.perf_counter())
+        self._submit(job)
         return gen
 
     def _current(self, gen: int) -> bool:
         return gen == self._gen
 
-    def _submit(self, gen, run, chunks, i, t0, partial) -> None:
+    def _submit(self, job: "_Job") -> None:
         try:
-            _POOL.submit(self._work, gen, run, chunks, i, t0, partial)
+            _POOL.submit(self._work, job)
         except RuntimeError:      # interpreter shutting down
             pass
 
-    def _work(self, gen, run, chunks, i, t0, partial) -> None:
-        if not self._current(gen):
+    def _work(self, job: "_Job") -> None:
+        if not self._current(job.gen):
             return
+        n = job.order.size
+        if job.done == 0:
+            size = min(FIRST_CHUNK, n)
+        else:
+            rate = job.done / max(time.perf_counter() - job.t0, 1e-6)
+            size = int(min(max(1, rate * CHUNK_SECONDS), max(1, n // 4)))
+        values = job.order[job.done: job.done + size]
         try:
-            part = compute_chunk(run, chunks[i])
+            part = compute_chunk(job.run, np.sort(values))
         except Exception as exc:   # report, never kill the worker, no traceback in the log
             log.warning("bifurcation diagram failed: %s: %s", type(exc).__name__, exc)
-            self._send(gen, lambda: self._on_error(gen, f"{type(exc).__name__}: {exc}"))
+            self._send(job.gen, lambda: self._on_error(job.gen, f"{type(exc).__name__}: {exc}"))
             self.done.set()
             return
-        if not self._current(gen):
+        if not self._current(job.gen):
             return
-        partial += part.pop("partial")
-        n = len(chunks)
-        last_chunk = i + 1 == n
-        self._send(gen, lambda: self._on_chunk(gen, part, i + 1, n))
-        if last_chunk:
-            elapsed = time.perf_counter() - t0
-            self._send(gen, lambda: self._on_done(gen, elapsed, partial))
+        job.partial += part.pop("partial")
+        job.done += values.size
+        done, elapsed = job.done, time.perf_counter() - job.t0
+        self._send(job.gen, lambda: self._on_chunk(job.gen, part, done, n))
+        if done >= n or elapsed > DIAGRAM_WALL_TIME:
+            info = {"elapsed": elapsed, "partial": job.partial, "done": done, "total": n}
+            self._send(job.gen, lambda: self._on_done(job.gen, info))
             self.done.set()
         else:
-            self._submit(gen, run, chunks, i + 1, t0, partial)
+            self._submit(job)
 
     def _send(self, gen: int, fn: Callable[[], None]) -> None:
         def guarded():
@@ -149,3 +164,12 @@ class DiagramRunner:
         except Exception as exc:   # the session went away
             log.info("diagram result dropped: %s", exc)
             self.cancel()
+
+
+class _Job:
+    """One diagram in progress (touched by one worker at a time)."""
+
+    def __init__(self, gen: int, run: Run, order: np.ndarray, t0: float):
+        self.gen, self.run, self.order, self.t0 = gen, run, order, t0
+        self.done = 0
+        self.partial = 0

@@ -24,6 +24,7 @@ import param
 from panel.io.state import set_curdoc
 
 from . import accuracy, compute, state
+from . import diagram
 from .diagram import DiagramRunner
 from .scenes import SCENES
 from .state import Run, Settings
@@ -32,6 +33,7 @@ from .views import BifurcationView, DisplacementView, ImpactMapView, PhaseView, 
 log = logging.getLogger(__name__)
 
 _ACCURACY_POOL = ThreadPoolExecutor(max_workers=1, thread_name_prefix="impact-accuracy")
+_SCENE_POOL = ThreadPoolExecutor(max_workers=2, thread_name_prefix="impact-scene")
 
 SIDEBAR_WIDTH = 310
 
@@ -111,9 +113,12 @@ class Explorer(pn.viewable.Viewer):
         # Served: start the diagram once the page is connected (updates to Panel panes
         # made before that can be lost); without a server: at once.
         self._loaded = self._doc is None
+        self._wanted: Run | None = None   # the latest valid settings (may be computing)
+        self._busy = False                # a scene job of this session is in flight
+        self._keep_message = True         # the link's message stays until a user change
         self._build_widgets()
         self.settings.param.watch(self._on_settings, list(state.QUERY_NAMES))
-        self._apply(initial=True)
+        self._apply()
         if errors:
             self._show_message("Some settings in the link were not valid and were "
                                "replaced by defaults: " + "; ".join(errors))
@@ -258,9 +263,11 @@ class Explorer(pn.viewable.Viewer):
         sc = next(s for s in SCENES if s.key == key)
         self.settings.param.update(**sc.settings())
         self.caption.object = sc.caption
-        self._scene_run = self.run
+        self._scene_run = self._wanted
+        self._update_caption_note()
 
     def _on_settings(self, *events) -> None:
+        self._keep_message = False
         try:
             with pn.io.hold(self._doc):   # one websocket message for all view updates
                 self._apply()
@@ -268,50 +275,88 @@ class Explorer(pn.viewable.Viewer):
             log.warning("update failed: %s: %s", type(exc).__name__, exc)
             self._show_message(f"Could not update: {type(exc).__name__}: {exc}")
 
-    def _apply(self, initial: bool = False) -> None:
+    def _apply(self) -> None:
+        """Validate the settings; restart the diagram if its inputs changed; request the
+        scene. Served, scenes are computed in a worker thread, one job per session at a
+        time, latest settings first, so a slow scene never blocks the event loop."""
         try:
             run = state.validate(state.snapshot(self.settings))
         except ValueError as exc:
             self._show_message(f"Not applied — {exc}. Showing the last valid settings.")
             return
+        if self._wanted is None or run.diagram_key() != self._wanted.diagram_key():
+            self._restart_diagram(run)
+        self._wanted = run
+        if self._doc is None:
+            self._scene_done(run, self._compute(run))
+        elif not self._busy:
+            self._busy = True
+            _SCENE_POOL.submit(self._scene_work)
+
+    def _compute(self, run: Run):
+        """(scene, section) for ``run``, reusing what did not change since the shown
+        run; or the ValueError the core raised."""
         prev = self.run
-        scene_changed = prev is None or run.scene_key() != prev.scene_key()
-        psi_changed = scene_changed or run.psi != prev.psi
-        diagram_changed = prev is None or run.diagram_key() != prev.diagram_key()
         try:
-            scene = compute.build_scene(run) if scene_changed else self.scene
-            section = compute.section_columns(run) if psi_changed else self.section
+            if prev is not None and run.scene_key() == prev.scene_key():
+                scene = self.scene
+            else:
+                scene = compute.build_scene(run)
+            if scene is self.scene and run.psi == prev.psi:
+                section = self.section
+            else:
+                section = compute.section_columns(run)
         except ValueError as exc:
-            self._show_message(f"Not applied — {exc}. Showing the last valid settings.")
-            return
-        self.run = run
-        if not initial:
+            return exc
+        return scene, section
+
+    def _scene_work(self) -> None:
+        """Worker thread: compute the latest wanted run, hand it to the event loop."""
+        run = self._wanted
+        try:
+            result = self._compute(run)
+        except Exception as exc:   # reported on the page, never a traceback in the log
+            log.warning("scene failed: %s: %s", type(exc).__name__, exc)
+            result = RuntimeError(f"{type(exc).__name__}: {exc}")
+        self._dispatch(lambda: self._scene_done(run, result))
+
+    def _scene_done(self, run: Run, result) -> None:
+        """Event loop: show the result; if the settings moved on meanwhile, go again."""
+        if isinstance(result, Exception):
+            self._show_message(f"Not applied — {result}. Showing the last valid settings.")
+        else:
+            self._show(run, *result)
+        if self._doc is not None:
+            if self._wanted is not run:
+                _SCENE_POOL.submit(self._scene_work)
+            else:
+                self._busy = False
+
+    def _show(self, run: Run, scene: compute.SceneData, section: dict) -> None:
+        """Update exactly the views whose data changed."""
+        if not self._keep_message:
             self._clear_message()
-        if scene_changed:
-            self.scene = scene
+        if scene is not self.scene:
             self.displacement.update(scene)
             self.phase.update(scene)
             self.impact_map.update(scene)
             self._update_badge(scene)
-        if psi_changed:
-            self.section = section
-            self.poincare.update(run, section)
-        if diagram_changed:
-            self._restart_diagram(run)
-        if scene_changed or diagram_changed:
             self.bifurcation.move_marker(run.params.omega,
                                          compute.last(scene.impacts["v"], 200))
+        if section is not self.section:
+            self.poincare.update(run, section)
+        self.run, self.scene, self.section = run, scene, section
         self._update_caption_note()
-        if not initial:
-            self._write_url()
+        self._write_url()
 
     def _on_load(self) -> None:
         with pn.io.hold(self._doc):
             self._loaded = True
-            self._restart_diagram(self.run)
+            self._restart_diagram(self._wanted)
             self._write_url()
 
     def _restart_diagram(self, run: Run) -> None:
+        self._diagram_run = run
         self.bifurcation.reset(run)
         self.progress.value = 0
         self.diagram_elapsed = None
@@ -324,15 +369,23 @@ class Explorer(pn.viewable.Viewer):
     def _on_chunk(self, gen: int, part: dict, done: int, total: int) -> None:
         self.bifurcation.append(part)
         self.progress.value = int(100 * done / total)
-        n = len(self.bifurcation.source.data["omega"])
-        self.diagram_status.object = f"computing… {done}/{total} chunks, {n} impacts"
+        self.diagram_status.object = f"computing… {done}/{total} ω values"
 
-    def _on_done(self, gen: int, elapsed: float, partial: int) -> None:
+    def _on_done(self, gen: int, info: dict) -> None:
+        elapsed, partial = info["elapsed"], info["partial"]
         self.diagram_elapsed = elapsed
         n = len(self.bifurcation.source.data["omega"])
-        run = self.run
+        run = self._diagram_run
         note = f", {partial} ω values stopped at a work limit" if partial else ""
-        text = f"complete: {run.bif_n} ω values, {n} impacts in {elapsed:.2f} s{note}"
+        if info["done"] < info["total"]:
+            self.diagram_status.object = (
+                f"stopped at the time limit ({diagram.DIAGRAM_WALL_TIME:g} s): "
+                f"{info['done']} of {info['total']} ω values, spread over the range{note}")
+            self.bifurcation.finish("partial (time limit)")
+            return
+        rec = sum(len(p["omega"]) for p in self.bifurcation.parts)
+        text = (f"complete: {run.bif_n} ω values, {rec} impacts recorded, {n} distinct "
+                f"points drawn, in {elapsed:.2f} s{note}")
         self.diagram_status.object = text
         self.progress.value = 100
         self.bifurcation.finish("complete")
@@ -355,7 +408,7 @@ class Explorer(pn.viewable.Viewer):
     def _update_caption_note(self) -> None:
         text = self.caption.object
         note = "\n\n*Settings changed since this scene was loaded.*"
-        if self._scene_run is None:
+        if self._scene_run is None or self.run is None:
             return
         changed = self.run != self._scene_run
         if changed and not text.endswith(note):
@@ -376,7 +429,7 @@ class Explorer(pn.viewable.Viewer):
 
     def _write_url(self) -> None:
         loc = pn.state.location
-        if loc is not None and self.run is not None:
+        if loc is not None and self.run is not None and self._loaded:
             loc.update_query(**state.to_query(self.run))
 
     # -- on-demand work ------------------------------------------------------------------

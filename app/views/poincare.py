@@ -18,7 +18,7 @@ class PoincareView:
 
     def update(self, run: Run, section: dict) -> None:
         self.source.data = {"x": section["x"], "v": section["v"]}
-        set_range(self.figure.x_range, *padded(section["x"], include=(run.params.g,)))
+        set_range(self.figure.x_range, *padded(section["x"]))
         set_range(self.figure.y_range, *padded(section["v"]))
         self.figure.title.text = (f"Poincaré map at ψ = {run.psi_frac:.3g} T = "
                                   f"{run.psi:.4g} s — {len(section['x'])} points")
