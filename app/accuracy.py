@@ -12,6 +12,9 @@ import time
 
 import numpy as np
 
+import impactlib as il
+
+from . import compute
 from .compute import run_simulate
 from .state import METHODS, Run
 
@@ -33,7 +36,10 @@ class MethodResult:
 
 def _run(run: Run, method: str):
     kw = dict(t_end=run.t_end, t_record=0.0, x0=run.x0, v0=run.v0, method=method,
-              wall_time=WALL_TIME)
+              wall_time=WALL_TIME,
+              limits=il.RunLimits(max_impacts=compute.SCENE_MAX_IMPACTS,
+                                  max_steps=compute.SCENE_MAX_STEPS[method],
+                                  max_samples=compute.SCENE_MAX_SAMPLES))
     if method == "rk4":
         kw["dt"] = run.dt
     elif method == "rk45":

@@ -8,13 +8,14 @@ import panel as pn
 # this very file; the `app` package is the folder itself, one level up.
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 from app.explorer import Explorer  # noqa: E402
-from app.serving import quiet_closed_sockets  # noqa: E402
+from app.serving import quiet_closed_sockets, quiet_rejected_values  # noqa: E402
 
 
 def create_app() -> Explorer:
     """A new, independent session: settings from the URL, its own views and workers."""
     pn.extension(notifications=False)
     quiet_closed_sockets()
+    quiet_rejected_values()
     return Explorer(args=pn.state.session_args)
 
 

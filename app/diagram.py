@@ -31,9 +31,13 @@ log = logging.getLogger(__name__)
 #: most a quarter of the values (each chunk makes the browser redraw the diagram).
 FIRST_CHUNK = 4
 CHUNK_SECONDS = 0.25
-#: Ceilings: wall time of one diagram, impacts simulated per omega value.
+#: Ceilings: wall time of one diagram; steps and impacts simulated per omega value for
+#: each 500 s of simulated time (the paper's diagrams need <= 11.3k steps and 2.3k
+#: impacts per value), so a costly value stops early, flagged, instead of running on.
 DIAGRAM_WALL_TIME = 20.0
-DIAGRAM_MAX_IMPACTS = 20_000
+DIAGRAM_MAX_STEPS_PER_500S = 50_000
+DIAGRAM_MAX_IMPACTS_PER_500S = 5_000
+MAX_CHUNK = 64
 #: Points of one omega value closer than this fraction of the largest |v| are drawn once
 #: (a period-1 orbit is one dot, not a hundred dots on top of each other).
 DRAW_RESOLUTION = 1e-3
@@ -45,6 +49,12 @@ _POOL = ThreadPoolExecutor(max_workers=1, thread_name_prefix="impact-diagram")
 
 def omega_values(run: Run) -> np.ndarray:
     return np.linspace(run.bif_min, run.bif_max, run.bif_n)
+
+
+def chunk_values(values: np.ndarray, n_chunks: int = 4) -> list[np.ndarray]:
+    """Interleaved chunks: chunk j holds values[j::n] (each spans the whole range)."""
+    n = max(1, min(n_chunks, values.size))
+    return [np.ascontiguousarray(values[j::n]) for j in range(n)]
 
 
 def interleaved(values: np.ndarray, stride: int = 16) -> np.ndarray:
@@ -66,10 +76,12 @@ def drawn(omega: np.ndarray, v: np.ndarray) -> np.ndarray:
 def compute_chunk(run: Run, values: np.ndarray) -> dict:
     """Impacts only (no dense output), exact method, independent starts, the core's
     parallel sweep; at most MAX_IMPACTS_PER_VALUE impacts kept per value."""
+    scale = max(1.0, run.t_end / 500.0)
     bif = il.bifurcation(run.params, "omega", values, t_end=run.t_end,
                          t_record=run.t_record, method="exact", x0=run.x0, v0=run.v0,
                          warm_start=False, cap_per_value=MAX_IMPACTS_PER_VALUE,
-                         max_impacts=DIAGRAM_MAX_IMPACTS)
+                         max_impacts=int(DIAGRAM_MAX_IMPACTS_PER_500S * scale),
+                         max_steps=int(DIAGRAM_MAX_STEPS_PER_500S * scale))
     status = np.asarray(bif.status)
     omega, v = np.asarray(bif.param, dtype=float), np.asarray(bif.v, dtype=float)
     return {"omega": omega, "v": v,
@@ -133,7 +145,7 @@ class DiagramRunner:
             size = min(FIRST_CHUNK, n)
         else:
             rate = job.done / max(time.perf_counter() - job.t0, 1e-6)
-            size = int(min(max(1, rate * CHUNK_SECONDS), max(1, n // 4)))
+            size = int(min(max(1, rate * CHUNK_SECONDS), max(1, n // 4), MAX_CHUNK))
         values = job.order[job.done: job.done + size]
         try:
             part = compute_chunk(job.run, np.sort(values))

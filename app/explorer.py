@@ -116,6 +116,7 @@ class Explorer(pn.viewable.Viewer):
         self._wanted: Run | None = None   # the latest valid settings (may be computing)
         self._busy = False                # a scene job of this session is in flight
         self._keep_message = True         # the link's message stays until a user change
+        self._restoring = False           # falling back to defaults (not a user change)
         self._build_widgets()
         self.settings.param.watch(self._on_settings, list(state.QUERY_NAMES))
         self._apply()
@@ -267,7 +268,8 @@ class Explorer(pn.viewable.Viewer):
         self._update_caption_note()
 
     def _on_settings(self, *events) -> None:
-        self._keep_message = False
+        if not self._restoring:
+            self._keep_message = False
         try:
             with pn.io.hold(self._doc):   # one websocket message for all view updates
                 self._apply()
@@ -295,7 +297,8 @@ class Explorer(pn.viewable.Viewer):
 
     def _compute(self, run: Run):
         """(scene, section) for ``run``, reusing what did not change since the shown
-        run; or the ValueError the core raised."""
+        run; or the exception that stopped it (ValueError: the core refused the
+        settings). Never raises."""
         prev = self.run
         try:
             if prev is not None and run.scene_key() == prev.scene_key():
@@ -308,21 +311,28 @@ class Explorer(pn.viewable.Viewer):
                 section = compute.section_columns(run)
         except ValueError as exc:
             return exc
+        except Exception as exc:   # reported on the page, one line in the log
+            log.warning("scene failed: %s: %s", type(exc).__name__, exc)
+            return RuntimeError(f"{type(exc).__name__}: {exc}")
         return scene, section
 
     def _scene_work(self) -> None:
         """Worker thread: compute the latest wanted run, hand it to the event loop."""
         run = self._wanted
-        try:
-            result = self._compute(run)
-        except Exception as exc:   # reported on the page, never a traceback in the log
-            log.warning("scene failed: %s: %s", type(exc).__name__, exc)
-            result = RuntimeError(f"{type(exc).__name__}: {exc}")
+        result = self._compute(run)
         self._dispatch(lambda: self._scene_done(run, result))
 
     def _scene_done(self, run: Run, result) -> None:
         """Event loop: show the result; if the settings moved on meanwhile, go again."""
-        if isinstance(result, Exception):
+        if isinstance(result, Exception) and self.run is None:
+            # Nothing on screen yet (a link the core refuses): show the defaults.
+            self._show_message(f"Not applied — {result}. Showing the default settings.")
+            self._restoring = True
+            try:
+                self.settings.param.update(**state.defaults())
+            finally:
+                self._restoring = False
+        elif isinstance(result, Exception):
             self._show_message(f"Not applied — {result}. Showing the last valid settings.")
         else:
             self._show(run, *result)
@@ -417,6 +427,8 @@ class Explorer(pn.viewable.Viewer):
             self.caption.object = text[: -len(note)]
 
     def _show_message(self, text: str) -> None:
+        if self._keep_message and self.message and text not in self.message:
+            text = f"{self.message}<br>{text}"     # the link's problems, all of them
         self.message = text
         self.message_pane.object = text
         self.message_pane.visible = True

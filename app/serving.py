@@ -40,3 +40,41 @@ def quiet_closed_sockets() -> None:
 
     handler._impact_explorer = True
     loop.set_exception_handler(handler)
+
+
+class _RejectedValueFilter(logging.Filter):
+    """Turn a rejected client value into one WARNING line without a traceback.
+
+    A hand-made websocket client can send values no browser sends (a method not in the
+    list, a string into a numeric input). Bokeh and Panel refuse them with a ValueError
+    and log it at ERROR level with a traceback; nothing is evaluated and the session
+    goes on, so one line is the honest record. Other exceptions are left untouched.
+    """
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        exc = record.exc_info[1] if record.exc_info else None
+        if not isinstance(exc, (ValueError, TypeError)):
+            return True
+        record.msg = "rejected a value sent by a client: %s: %s"
+        record.args = (type(exc).__name__, str(exc)[:300])
+        record.exc_info = None
+        record.exc_text = None
+        record.levelno, record.levelname = logging.WARNING, "WARNING"
+        return True
+
+
+def _one_line_exception(exc: BaseException) -> None:
+    """Panel's exception handler: one line instead of re-raising into the event loop
+    (which makes tornado log 'Exception in callback' with a traceback)."""
+    log.warning("a callback failed: %s: %s", type(exc).__name__, str(exc)[:300])
+
+
+def quiet_rejected_values() -> None:
+    """Install the filter and Panel's exception handler (idempotent, per process)."""
+    import panel as pn
+
+    for name in ("panel.reactive", "bokeh.server.protocol_handler"):
+        logger = logging.getLogger(name)
+        if not any(isinstance(f, _RejectedValueFilter) for f in logger.filters):
+            logger.addFilter(_RejectedValueFilter())
+    pn.config.exception_handler = _one_line_exception

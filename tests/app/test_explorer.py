@@ -158,3 +158,52 @@ def test_csv_downloads_hold_what_is_shown(make_explorer):
     assert len(data) >= len(shown)
     assert np.allclose(np.unique(data[:, 0]), np.unique(shown), rtol=1e-9)
     assert e.downloads[0].filename == "impacts_omega2_r0.8_c0.05_g0.csv"
+
+
+def test_link_the_core_refuses_falls_back_to_defaults(make_explorer):
+    # dt = 10 passes the app's checks but not the core's RK4 stability limit
+    e = make_explorer(method="rk4", dt="10")
+    assert "dt" in e.message and e.message_pane.visible
+    assert e.run is not None and e.run.method == "exact"
+    assert len(e.displacement.source.data["x"]) > 0
+
+
+@pytest.mark.parametrize("key,paper", [
+    ("fig2", "1-impact period-1"),          # Lee, Fig. 2 caption
+    ("fig4", "complete chattering"),        # Fig. 4: complete chattering, period-1
+    ("fig5", "3-impact period-2"),          # Fig. 5 caption (on the longer window)
+    ("fig6", "chaotic"),                    # Fig. 6: "∞-impact period-∞"
+])
+def test_scene_badges_say_what_the_paper_says(make_explorer, key, paper):
+    e = make_explorer()
+    e.load_scene(key)
+    assert paper in e.badge.object
+
+
+def test_extreme_physics_is_cut_short_with_a_message(make_explorer):
+    # m = 1e-6: natural frequency 1000 rad/s, hundreds of thousands of impacts
+    import time
+    t0 = time.perf_counter()
+    e = make_explorer(m="1e-6", bif_n="4")
+    assert time.perf_counter() - t0 < 10
+    assert "⚠" in e.badge.object and "limit" in e.badge.object
+
+
+def test_diagram_stops_at_its_wall_time(make_explorer, monkeypatch):
+    from app import diagram
+    monkeypatch.setattr(diagram, "DIAGRAM_WALL_TIME", 0.0)
+    e = make_explorer(bif_n="200")
+    assert e.diagram_status.object.startswith("stopped at the time limit")
+    assert "partial" in e.bifurcation.figure.title.text
+
+
+def test_accuracy_readout_compares_the_three_methods():
+    from app import accuracy, state
+    run = state.validate(state.defaults())
+    rows = accuracy.compare_methods(run)
+    assert [r.method for r in rows] == ["exact", "rk4", "rk45"]
+    assert rows[0].dt_max == 0 and rows[0].compared > 10
+    for r in rows[1:]:
+        assert r.compared == rows[0].compared and r.dt_max < 1e-3 and r.seconds > 0
+    html = accuracy.to_html(rows)
+    assert "rk45" in html and "<table" in html
