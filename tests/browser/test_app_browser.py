@@ -197,6 +197,26 @@ def test_bad_widget_input_shows_message_and_keeps_scene(page, server):
     msg.wait_for(state="hidden", timeout=10_000)
 
 
+def test_accuracy_readout_and_csv_download(page, server):
+    open_app(page, server)
+    page.get_by_text("Accuracy", exact=True).click()
+    page.get_by_role("button", name="Compare methods").click()
+    page.wait_for_function("() => true")
+    deadline = time.monotonic() + 30
+    while "rk45" not in text(page, "ie-accuracy-out") and time.monotonic() < deadline:
+        page.wait_for_timeout(100)
+    table = text(page, "ie-accuracy-out")
+    assert "exact" in table and "rk4" in table and "rk45" in table, table
+    page.get_by_text("Downloads", exact=True).click()
+    with page.expect_download(timeout=15_000) as info:
+        page.get_by_text("Impacts (CSV)").click()
+    download = info.value
+    assert download.suggested_filename == "impacts_omega2_r0.8_c0.05_g0.csv"
+    lines = Path(download.path()).read_text().splitlines()
+    assert lines[0] == "t,phase,v_before,v_after"
+    assert len(lines) - 1 == page.evaluate("ie.len('impact_map')")
+
+
 LATENCY_JS = """() => {
   const src = ie.model('displacement').data_source;
   window.__lat = new Promise((resolve) => {
