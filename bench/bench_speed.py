@@ -367,7 +367,7 @@ def profile_diagram():
                       "chatter": int((a[sel, 4] > 0).sum())})
     # Python-side setup of a sweep: validating 1000 Params and packing constants
     tic = time.perf_counter()
-    il.sweeps._param_rows(PAPER, [{"omega": v} for v in OMEGAS], "exact", None, None)
+    il.sweeps._param_rows(PAPER, {"omega": OMEGAS}, "exact", None, None)
     setup = time.perf_counter() - tic
     # chunk balance of the 2-thread pool: the chunks bifurcation() makes, costed
     nw = il.sweeps.worker_count()
