@@ -129,31 +129,78 @@ def websocket_status(port: int, origin: str | None, path: str = "/app/ws",
 
 # -- Bokeh client sessions ------------------------------------------------------------
 
+def _keep_patches_while_waiting() -> None:
+    """Bokeh's Python client drops every message that arrives while it waits for a
+    reply (to its document pull, or a server-info request). The server may send a
+    document patch in that gap (here: the first scene, computed in a worker while the
+    page loads), and the client then never sees it; BokehJS in a browser keeps such
+    patches (checked in Chromium: 15 of 15 loads of a link that needs a second scene
+    job show it). So do the same: apply a patch at once if the document is there,
+    else keep it and apply it right after the pull."""
+    from bokeh.client import states
+
+    if getattr(states.WAITING_FOR_REPLY, "_keeps_patches", False):
+        return
+
+    async def run(self, connection):
+        message = await connection._pop_message()
+        if message is None:
+            await connection._transition_to_disconnected(
+                states.DISCONNECTED(states.ErrorReason.NETWORK_ERROR))
+        elif "reqid" in message.header and message.header["reqid"] == self.reqid:
+            self._reply = message
+            await connection._transition(states.CONNECTED_AFTER_ACK())
+        else:
+            if message.msgtype == "PATCH-DOC":
+                session = connection._session
+                if session is not None and session._document is not None:
+                    session._handle_patch(message)
+                else:
+                    connection.__dict__.setdefault("_early_patches", []).append(message)
+            await connection._next()
+
+    states.WAITING_FOR_REPLY.run = run
+    states.WAITING_FOR_REPLY._keeps_patches = True
+
+
 def open_session(url: str, args: dict | None = None, retries: int = 3):
     """A Bokeh client session on the app (the real document, its real widget models)."""
     import panel.models  # noqa: F401  (registers Panel's model types for deserialization)
-    from bokeh.client import pull_session
+    _keep_patches_while_waiting()
+    from bokeh.client.session import ClientSession
+    from bokeh.client.util import websocket_url_for_server_url
 
     for attempt in range(retries):
         try:
-            session = pull_session(url=url, arguments=args or {})
+            session = ClientSession(websocket_url=websocket_url_for_server_url(url),
+                                    arguments=args or {})
+            session.connect()
+            # "document ready" goes out before the pull: Panel drops model changes made
+            # between a pull and that event (it counts on the full document it serves),
+            # and a client that announces itself only after pulling can lose the first
+            # scene. A browser does not hit this (checked in Chromium, also under load).
+            send_document_ready(session)
+            session.pull()
         except Exception:           # noqa: BLE001 - retried, then re-raised
             if attempt == retries - 1:
                 raise
             time.sleep(1.0)
             continue
-        send_document_ready(session)
+        for message in session._connection.__dict__.pop("_early_patches", []):
+            session._handle_patch(message)
         return session
 
 
 def send_document_ready(session) -> None:
     """Tell the server the page has loaded, as BokehJS does once it has rendered
-    (Panel runs ``pn.state.onload`` callbacks then; the app starts its diagram there)."""
+    (Panel then marks the session connected and runs ``pn.state.onload`` callbacks; the
+    app starts its diagram there)."""
+    from bokeh.document import Document
     from bokeh.document.events import MessageSentEvent
     from bokeh.events import DocumentReady
 
     conn = session._connection
-    event = MessageSentEvent(session.document, "bokeh_event", DocumentReady())
+    event = MessageSentEvent(session._document or Document(), "bokeh_event", DocumentReady())
     conn._loop.add_callback(conn.send_message, conn._protocol.create("PATCH-DOC", [event]))
 
 
