@@ -125,8 +125,30 @@ class Explorer(pn.viewable.Viewer):
                                "replaced by defaults: " + "; ".join(errors))
         self._layout = self._build_layout()
         if self._doc is not None:
-            pn.state.on_session_destroyed(lambda ctx: self.runner.cancel())
+            pn.state.on_session_destroyed(self._on_session_destroyed)
             pn.state.onload(self._on_load)
+
+    def _on_session_destroyed(self, session_context) -> None:
+        """The tab is gone: stop the diagram and let the whole session be collected."""
+        self.runner.cancel()
+        self.release_links()
+
+    def release_links(self) -> None:
+        """Drop this session's entries from Panel's class-wide link registry.
+
+        Panel 1.9.4 keeps every jslink/jscallback in ``panel.links.Callback.registry``, a
+        WeakKeyDictionary keyed by the source widget whose values refer back to that key
+        (each EditableFloatSlider links its text input to its slider), so the entries of
+        a closed session never go away and keep the whole session alive: widgets,
+        Settings, figures and their data, a few MB per closed tab, for good.
+        (tests/reliability/test_load.py checks that closed sessions are freed.)
+        """
+        from panel.links import Callback
+
+        owned = {id(obj) for obj in self._layout.select()}
+        for key in list(Callback.registry.keys()):
+            if id(key) in owned:
+                Callback.registry.pop(key, None)
 
     # -- widgets and layout ------------------------------------------------------------
 
