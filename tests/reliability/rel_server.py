@@ -40,9 +40,15 @@ class Served:
     """``panel serve app/app.py`` on 127.0.0.1:<port>; ``stop()`` ends its process group."""
 
     def __init__(self, log_name: str, extra_args=(), origin: str | None = "localhost",
-                 env: dict | None = None, start_timeout: float = 120.0):
+                 env: dict | None = None, start_timeout: float = 120.0, probe: bool = False):
         RESULTS.mkdir(parents=True, exist_ok=True)
         self.port = free_port()
+        env = dict(env or {})
+        self.probe_dir = None
+        if probe:       # count live session objects on request (rel_probe.py)
+            self.probe_dir = Path(tempfile.mkdtemp(prefix="impact-probe-"))
+            env["IMPACT_PROBE_DIR"] = str(self.probe_dir)
+            extra_args = [*extra_args, "--setup", str(Path(__file__).with_name("rel_probe.py"))]
         self.log_path = RESULTS / log_name
         panel = Path(sys.executable).with_name("panel")
         cmd = [str(panel), "serve", "app/app.py", "--address", "127.0.0.1",
@@ -56,7 +62,7 @@ class Served:
         self.cmd = cmd
         with open(self.log_path, "wb") as out:
             self.proc = subprocess.Popen(cmd, cwd=ROOT, stdout=out, stderr=subprocess.STDOUT,
-                                         start_new_session=True, env={**os.environ, **(env or {})})
+                                         start_new_session=True, env={**os.environ, **env})
         self.base = f"http://localhost:{self.port}"
         self.url = f"{self.base}/app"
         deadline = time.monotonic() + start_timeout
@@ -95,6 +101,20 @@ class Served:
                 if line.startswith("VmRSS:"):
                     return int(line.split()[1]) / 1024.0
         raise RuntimeError("no VmRSS")
+
+    def live_objects(self, timeout: float = 60.0) -> dict:
+        """Counts of session objects alive in the server after a full collection."""
+        import json
+
+        answer = self.probe_dir / "answer.json"
+        answer.unlink(missing_ok=True)
+        (self.probe_dir / "request").write_text("?")
+        end = time.monotonic() + timeout
+        while not answer.exists():
+            if time.monotonic() > end:
+                raise TimeoutError("the server's probe did not answer")
+            time.sleep(0.1)
+        return json.loads(answer.read_text())
 
     def get(self, path: str) -> tuple[int, bytes]:
         try:
