@@ -71,17 +71,19 @@ def drive(url: str, log: SessionLog, start: float, deadline: float, bif_n: int) 
         while time.monotonic() < deadline:
             before = _columns(doc)
             title = _diagram_title(doc)
+            # values on the sliders' step grid (0.01), as a browser's slider sends them,
+            # and never the current value (that would change nothing)
             if k % 3 == 2:
-                new_r = round(rng.uniform(0.3, 0.95), 3)
-                while new_r == r.value:
-                    new_r = round(rng.uniform(0.3, 0.95), 3)
+                new_r = rng.randrange(30, 96) / 100
+                while abs(new_r - r.value) < 0.005:
+                    new_r = rng.randrange(30, 96) / 100
                 tic = time.monotonic()
                 r.value = new_r
                 moved = "r"
             else:
-                new_omega = round(rng.uniform(0.5, 4.5), 3)
-                while new_omega == omega.value:
-                    new_omega = round(rng.uniform(0.5, 4.5), 3)
+                new_omega = rng.randrange(50, 451) / 100
+                while abs(new_omega - omega.value) < 0.005:
+                    new_omega = rng.randrange(50, 451) / 100
                 tic = time.monotonic()
                 omega.value = new_omega
                 moved = "omega"
@@ -89,6 +91,8 @@ def drive(url: str, log: SessionLog, start: float, deadline: float, bif_n: int) 
                       is not before["displacement"], 60)
             if not ok:
                 log.timeouts += 1
+                log.error = log.error or (f"no scene {60} s after {moved} -> "
+                                          f"{new_r if moved == 'r' else new_omega}")
                 continue
             log.latencies.append(time.monotonic() - tic)
             if moved == "r":
