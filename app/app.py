@@ -8,7 +8,8 @@ import panel as pn
 # this very file; the `app` package is the folder itself, one level up.
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 from app.explorer import Explorer  # noqa: E402
-from app.serving import quiet_closed_sockets, quiet_rejected_values  # noqa: E402
+from app.serving import (  # noqa: E402
+    deliver_stranded_writes, quiet_closed_sockets, quiet_rejected_values)
 
 
 def create_app() -> Explorer:
@@ -16,6 +17,7 @@ def create_app() -> Explorer:
     pn.extension(notifications=False)
     quiet_closed_sockets()
     quiet_rejected_values()
+    deliver_stranded_writes()
     return Explorer(args=pn.state.session_args)
 
 
