@@ -183,10 +183,41 @@ def _keep_patches_while_waiting() -> None:
     states.WAITING_FOR_REPLY._keeps_patches = True
 
 
+def _flat_message_loop() -> None:
+    """Bokeh's Python client handles each message by awaiting the next handler, one
+    level deeper per message, so a long wait that sees a few hundred messages (a
+    streamed diagram, the pings) ends in RecursionError. Handle them in a loop."""
+    from bokeh.client import connection, states
+
+    if getattr(connection.ClientConnection._handle_messages, "_flat", False):
+        return
+
+    async def _handle_messages(self):
+        while True:
+            message = await self._pop_message()
+            if message is None:
+                await self._transition_to_disconnected(
+                    states.DISCONNECTED(states.ErrorReason.HTTP_ERROR, 500, "closed"))
+                return
+            if message.msgtype == "PATCH-DOC":
+                self._session._handle_patch(message)
+            if not isinstance(self._state, states.CONNECTED_AFTER_ACK):
+                await self._next()
+                return
+            if self._until_predicate is not None and self._until_predicate():
+                self._until_predicate = None
+                self._loop.stop()
+                return
+
+    _handle_messages._flat = True
+    connection.ClientConnection._handle_messages = _handle_messages
+
+
 def open_session(url: str, args: dict | None = None, retries: int = 3):
     """A Bokeh client session on the app (the real document, its real widget models)."""
     import panel.models  # noqa: F401  (registers Panel's model types for deserialization)
     _keep_patches_while_waiting()
+    _flat_message_loop()
     from bokeh.client.session import ClientSession
     from bokeh.client.util import websocket_url_for_server_url
 
@@ -229,7 +260,7 @@ def pump(session, predicate, timeout: float = 30.0) -> bool:
     ``session.document``) until ``predicate()`` holds or ``timeout`` passes.
 
     The client loop only looks at the predicate after a message arrives, so a light
-    server-info request is sent every 0.25 s while waiting."""
+    server-info request is sent every 0.5 s while waiting."""
     conn = session._connection
     loop = conn._loop
     deadline = time.monotonic() + timeout
@@ -238,7 +269,7 @@ def pump(session, predicate, timeout: float = 30.0) -> bool:
     def ping():
         if pinging["on"] and conn.connected:
             loop.add_callback(conn.send_message, conn._protocol.create("SERVER-INFO-REQ"))
-            loop.call_later(0.25, ping)
+            loop.call_later(0.5, ping)
 
     result = {"ok": False}
 
