@@ -266,7 +266,9 @@ def markdown(res: dict) -> str:
         f"client): median **{res['latency_median_ms']} ms**, 95th percentile "
         f"**{res['latency_p95_ms']} ms**, max {res['latency_max_ms']} ms",
         f"- diagram recompute (r change → diagram complete): median "
-        f"{res['diagram_median_s']} s, 95th percentile {res['diagram_p95_s']} s",
+        f"{res['diagram_median_s']} s, 95th percentile {res['diagram_p95_s']} s; "
+        f"connecting (burst of {res['sessions']} within {0.25 * res['sessions']:g} s): "
+        f"median {res['connect_median_s']} s",
         f"- server memory (VmRSS): baseline **{res['rss_baseline_mb']} MB** (after one warm "
         f"session), peak **{res['rss_peak_mb']} MB**, after each round's sessions closed "
         f"**{' / '.join(f'{a} MB' for a in res['rss_after_mb'])}** (settled within "
@@ -287,12 +289,17 @@ def main(argv=None) -> int:
     ap.add_argument("--sessions", type=int, default=24)
     ap.add_argument("--seconds", type=float, default=60.0)
     ap.add_argument("--rounds", type=int, default=2)
+    ap.add_argument("--from-json", metavar="PATH",
+                    help="do not run: take the figures of an earlier run's JSON")
     ap.add_argument("--write", action="store_true",
                     help="put the figures into RELIABILITY.md (between the load markers)")
     args = ap.parse_args(argv)
-    res = run(args.sessions, args.seconds, args.rounds)
-    RESULTS.mkdir(parents=True, exist_ok=True)
-    (RESULTS / f"load-{args.sessions}.json").write_text(json.dumps(res, indent=1))
+    if args.from_json:
+        res = json.loads(Path(args.from_json).read_text())
+    else:
+        res = run(args.sessions, args.seconds, args.rounds)
+        RESULTS.mkdir(parents=True, exist_ok=True)
+        (RESULTS / f"load-{args.sessions}.json").write_text(json.dumps(res, indent=1))
     text = markdown(res)
     print(text)
     print(json.dumps({k: v for k, v in res.items() if k != "per_session"}, indent=1))
