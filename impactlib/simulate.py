@@ -109,41 +109,33 @@ def run_kernel(sp, method, t, x, v, t_end, t_record, hmax, rate, dt, rtol, atol,
             v = 0.0
             stuck = False
             continue
+        started_at_rest = False
         if method == 0:
             seg = start_segment(sp, t, x, v)
             kind, s, vh, ns = next_impact(sp, seg, t_end - t, hmax, max_steps - nsteps)
-            nsteps += ns
             th = t + s
             ip = _sample_segment(sp, seg, th, pc_t, pc_x, pc_v, ip)
             idn = _sample_segment(sp, seg, th, d_t, d_x, d_v, idn)
-            if kind != IMPACT:
-                xe, ve, ae, je, rhe, sce = flight_state(sp, seg, s)
-                t, x, v = th, xe, ve
-                if kind == STEP_LIMIT:
-                    status = 2
-                break
             started_at_rest = s == 0.0 and x <= g and v == 0.0
+            xh, vend = g, vh
+            if kind != IMPACT:
+                xh, vend, ae, je, rhe, sce = flight_state(sp, seg, s)
         elif method == 1:
             kind, th, xh, vh, ns, ip, idn = advance_rk4(
                 sp, t, x, v, t_end, dt, pc_t, pc_x, pc_v, ip, d_t, d_x, d_v, idn, max_steps - nsteps)
-            nsteps += ns
-            if kind != IMPACT:
-                t, x, v = th, xh, vh
-                if kind == STEP_LIMIT:
-                    status = 2
-                break
-            started_at_rest = False
+            vend = vh
         else:
             kind, th, xh, vh, h45, ns, ip, idn = advance_rk45(
                 sp, t, x, v, h45, t_end, rtol, atol, pc_t, pc_x, pc_v, ip, d_t, d_x, d_v, idn,
                 max_steps - nsteps)
-            nsteps += ns
-            if kind != IMPACT:
-                t, x, v = th, xh, vh
-                if kind == STEP_LIMIT:
-                    status = 2
-                break
-            started_at_rest = False
+            vend = vh
+        nsteps += ns
+        if kind != IMPACT:
+            # reached t_end, or stopped at the step limit: (th, xh, vend) is where
+            t, x, v = th, xh, vend
+            if kind == STEP_LIMIT:
+                status = 2
+            break
         # impact at th with velocity vh <= 0
         t = th
         x = g
