@@ -10,10 +10,12 @@ A settled start then stops: the work per start is its transient, not a fixed win
 attractors are told apart by comparing their section points as SETS, within the sum of
 the two orbits' error bounds (times a safety factor); never by a tolerance on one point.
 Starts that have not settled after ``max_periods`` periods are grouped by the bounding box
-of their last section points; one member of each group is classified by
+of their last ``n_window`` section points; one member of each group is classified by
 :func:`impactlib.classify` on a fresh record window, and a group becomes a chaotic
-attractor only when classify calls that run chaotic.  Everything else is undecided (-1),
-with the reason in ``message``.
+attractor only when classify calls that run chaotic.  Once a chaotic attractor is known,
+later starts whose section points fill its box (two windows in) stop there instead of
+running to ``max_periods``.  Everything else is undecided (-1), with the reason in
+``message``.
 
 The grid runs in row blocks on the sweeps' shared thread pool (``nogil`` kernels);
 :func:`iter_basins` streams the blocks, :func:`basins` collects them.
@@ -28,7 +30,7 @@ import numpy as np
 
 from ._jit import jit
 from .classify import MAX_PERIOD, classify, describe
-from .flight import FA
+from .flight import FA, OM
 from .model import Params, RunLimits
 from .simulate import run_constants, run_kernel, simulate
 
@@ -43,6 +45,7 @@ UNBOUNDED_FACTOR = 1e12    # |x| or |v| beyond this many grid scales: unbounded
 
 # per-start outcomes of the kernel
 SETTLED, UNSETTLED, WORK_LIMIT, UNBOUNDED = 0, 1, 2, 3
+ON_CHAOTIC = 16             # + row of the known chaotic box the start's points fill
 
 
 @jit
@@ -126,19 +129,40 @@ def _tail_error(hx, hv, j, n, size):
 
 
 @jit
+def _matching_box(box, boxes, rtol):
+    """Row of ``boxes`` that ``box`` agrees with (see _box_match), or -1."""
+    for q in range(boxes.shape[0]):
+        ext = max(box[1] - box[0], box[3] - box[2], boxes[q, 1] - boxes[q, 0],
+                  boxes[q, 3] - boxes[q, 2], 1e-300)
+        ok = True
+        for i in range(4):
+            if abs(box[i] - boxes[q, i]) > rtol * ext:
+                ok = False
+        if ok:
+            return q
+    return -1
+
+
+@jit
 def settle_starts(sp, rate, hmax, phase, x0s, v0s, settle_tol, round_tol, set_factor, huge,
-                  max_periods, max_period, n_window, max_impacts, max_steps,
-                  outcome, n_out, m_out, chat_out, pts_out, err_out, box_out, fin_out, used_out):
+                  max_periods, max_period, n_window, chaos_boxes, box_rtol, max_impacts,
+                  max_steps, outcome, n_out, m_out, chat_out, pts_out, err_out, box_out,
+                  fin_out, used_out):
     """Follow each start (x0s[s], v0s[s]) at t = phase period by period until it settles.
 
     Outputs per start s: outcome (SETTLED, UNSETTLED, WORK_LIMIT, UNBOUNDED), n_out the
     period n, m_out the impacts in the last n periods, chat_out the chatter sequences summed
     in them (> 0: complete chattering), pts_out[s, :n] the last n section points in time
     order, err_out their error bound, box_out (x_min, x_max, v_min, v_max) of the last
-    ``n_window`` points of an unsettled start, fin_out (t, x, v) where it stopped, used_out
+    complete window of ``n_window`` points, fin_out (t, x, v) where it stopped, used_out
     the periods run.
+
+    ``chaos_boxes`` (q, 4) are the boxes of chaotic attractors already found: a start
+    not settled after two windows whose last window's box matches one of them (within
+    ``box_rtol`` of the extent, as :func:`_box_match`) stops there, outcome
+    ON_CHAOTIC + its row in chaos_boxes, instead of running to max_periods.
     """
-    period = 2.0 * math.pi / sp[5]
+    period = 2.0 * math.pi / sp[OM]
     size = 4 * max_period + 1
     hx = np.empty(size)
     hv = np.empty(size)
@@ -158,6 +182,7 @@ def settle_starts(sp, rate, hmax, phase, x0s, v0s, settle_tol, round_tol, set_fa
         n_steps = 0
         res = UNSETTLED
         box = np.array([np.inf, -np.inf, np.inf, -np.inf])
+        wbox = box.copy()
         k = 0
         while k < max_periods:
             k += 1
@@ -180,11 +205,21 @@ def settle_starts(sp, rate, hmax, phase, x0s, v0s, settle_tol, round_tol, set_fa
             hv[a] = v
             hm[a] = n_rec
             hc[a] = n_tail
-            if k > max_periods - n_window:
-                box[0] = min(box[0], x)
-                box[1] = max(box[1], x)
-                box[2] = min(box[2], v)
-                box[3] = max(box[3], v)
+            wbox[0] = min(wbox[0], x)
+            wbox[1] = max(wbox[1], x)
+            wbox[2] = min(wbox[2], v)
+            wbox[3] = max(wbox[3], v)
+            if k % n_window == 0:
+                box[:] = wbox
+                wbox[0] = np.inf
+                wbox[1] = -np.inf
+                wbox[2] = np.inf
+                wbox[3] = -np.inf
+                if k >= 2 * n_window:
+                    hit = _matching_box(box, chaos_boxes, box_rtol)
+                    if hit >= 0:
+                        res = ON_CHAOTIC + hit
+                        break
             found = 0
             err = 0.0
             for n in range(1, max_period + 1):
@@ -468,6 +503,10 @@ class _Registry:
         self.limited = 0                   # starts stopped by a work ceiling
         self.unbounded = 0
         self.verdicts: dict[str, int] = {}
+        # boxes of the chaotic attractors found, read by blocks as they start (replaced,
+        # never mutated: a block sees one consistent snapshot)
+        self.chaos_boxes = np.empty((0, 4))
+        self.chaos_index: list[int] = []
 
     def _add(self, att):
         self.items.append(att)
@@ -500,10 +539,14 @@ class _Registry:
             lab[s] = hit
         return lab
 
-    def unsettled(self, box, fin):
+    def unsettled(self, box, fin, count=True):
         lab = np.full(box.shape[0], -1, dtype=np.int64)
         for s in range(box.shape[0]):
             g = next((g for g in self.groups if _box_match(g[0], box[s])), None)
+            if not count:
+                if g is None and self.classified < MAX_CLASSIFY:
+                    self._classify(box[s], fin[s])
+                continue
             if g is None:
                 if self.classified >= MAX_CLASSIFY:
                     self.unsettled_left += 1
@@ -531,6 +574,8 @@ class _Registry:
             cbox = (P[:, 0].min(), P[:, 0].max(), P[:, 1].min(), P[:, 1].max())
             idx = self._add(Attractor(label=mo.label, kind="chaotic", impacts=mo.impacts,
                                       period=mo.period, points=P, error=math.nan, box=cbox))
+            self.chaos_index.append(idx)
+            self.chaos_boxes = np.vstack([self.chaos_boxes, np.asarray(box, dtype=float)])
         g = (tuple(box), idx, mo.label)
         self.groups.append(g)
         return g
@@ -552,11 +597,12 @@ class _Registry:
         return "; ".join(parts) if parts else "complete"
 
 
-def _block(sp, rate, hmax, phase, xs, v_rows, settle_tol, round_tol, huge, max_periods,
-           n_window, max_impacts, max_steps):
+def _block(reg, sp, rate, hmax, phase, xs, v_rows, settle_tol, round_tol, huge, max_periods,
+           n_window, max_impacts, max_steps, pairs=False):
+    # the grid rows v_rows x xs, or with pairs the starts (xs[i], v_rows[i])
     nx = xs.size
-    x0s = np.tile(xs, v_rows.size)
-    v0s = np.repeat(v_rows, nx)
+    x0s = xs if pairs else np.tile(xs, v_rows.size)
+    v0s = v_rows if pairs else np.repeat(v_rows, nx)
     k = x0s.size
     outcome = np.zeros(k, dtype=np.int64)
     n_out = np.zeros(k, dtype=np.int64)
@@ -568,8 +614,8 @@ def _block(sp, rate, hmax, phase, xs, v_rows, settle_tol, round_tol, huge, max_p
     fin = np.zeros((k, 3))
     used = np.zeros(k, dtype=np.int64)
     settle_starts(sp, rate, hmax, phase, x0s, v0s, settle_tol, round_tol, SET_FACTOR, huge,
-                  max_periods, MAX_PERIOD, n_window, max_impacts, max_steps,
-                  outcome, n_out, m_out, chat, pts, err, box, fin, used)
+                  max_periods, MAX_PERIOD, n_window, reg.chaos_boxes, BOX_RTOL, max_impacts,
+                  max_steps, outcome, n_out, m_out, chat, pts, err, box, fin, used)
     return outcome, n_out, m_out, chat, pts, err, box, fin, used
 
 
@@ -601,8 +647,19 @@ def _iter(p, xr, vr, nx, nv, phase, max_periods, n_window, rows_per_block, worke
     per = rows_per_block or max(1, math.ceil(256 / nx))
     starts = list(range(0, nv, per))
     reg = _Registry(p, phase, n_window, limits)
-    args = [(sp, rate, hmax, phase, xs, vs[a:a + per], settle_tol, round_tol, huge,
-             max_periods, n_window, limits.max_impacts, limits.max_steps) for a in starts]
+    common = (settle_tol, round_tol, huge, max_periods, n_window, limits.max_impacts,
+              limits.max_steps)
+    # probes spread over the grid, run first: a chaotic attractor they find is known to
+    # every block from the start (its starts then stop after two windows)
+    ix = np.unique([nx // 2, nx // 4, (3 * nx) // 4])
+    iv = np.unique([nv // 2, nv // 4, (3 * nv) // 4])
+    px, pv = np.meshgrid(xs[ix], vs[iv])
+    outcome, *_, box, fin, _ = _block(reg, sp, rate, hmax, phase, px.ravel(), pv.ravel(),
+                                      *common, pairs=True)
+    un = outcome == UNSETTLED
+    if un.any():
+        reg.unsettled(box[un], fin[un], count=False)
+    args = [(reg, sp, rate, hmax, phase, xs, vs[a:a + per], *common) for a in starts]
     done = 0
     stopped = False
     gen = _run_tasks(_block, args, workers)
@@ -616,6 +673,9 @@ def _iter(p, xr, vr, nx, nv, phase, max_periods, n_window, rows_per_block, worke
             un = outcome == UNSETTLED
             if un.any():
                 lab[un] = reg.unsettled(box[un], fin[un])
+            known = outcome >= ON_CHAOTIC
+            if known.any():
+                lab[known] = np.asarray(reg.chaos_index)[outcome[known] - ON_CHAOTIC]
             reg.limited += int(np.sum(outcome == WORK_LIMIT))
             reg.unbounded += int(np.sum(outcome == UNBOUNDED))
             rows = lab.reshape(-1, nx)
