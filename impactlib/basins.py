@@ -41,6 +41,7 @@ SET_FACTOR = 4.0           # safety factor on the summed error bounds when compa
 BOX_RTOL = 0.1             # chaotic boxes agree within this fraction of their extent
 MAX_CELLS = 1_000_000
 MAX_CLASSIFY = 16          # classify runs per call, for starts that never settled
+MAX_ATTRACTORS = 64        # more distinct orbits than this: a continuum, not attractors
 UNBOUNDED_FACTOR = 1e12    # |x| or |v| beyond this many grid scales: unbounded
 
 # per-start outcomes of the kernel
@@ -502,6 +503,7 @@ class _Registry:
         self.unsettled_left = 0            # unsettled starts left undecided
         self.limited = 0                   # starts stopped by a work ceiling
         self.unbounded = 0
+        self.overflow = 0                  # settled starts beyond MAX_ATTRACTORS orbits
         self.verdicts: dict[str, int] = {}
         # boxes of the chaotic attractors found, read by blocks as they start (replaced,
         # never mutated: a block sees one consistent snapshot)
@@ -522,6 +524,9 @@ class _Registry:
             cand = [i for i, a in enumerate(self.items)
                     if a.kind != "chaotic" and a.points.shape[0] == k]
             hit = next((i for i in cand if self.items[i].same_orbit(pts[s, :k], err[s])), -1)
+            if hit < 0 and len(self.items) >= MAX_ATTRACTORS:
+                self.overflow += 1
+                continue
             if hit < 0:
                 mm = -1 if chat[s] > 0 else int(m[s])
                 mo = describe(mm, k)
@@ -594,6 +599,13 @@ class _Registry:
                          "max_steps)")
         if self.unbounded:
             parts.append(f"{self.unbounded} starts grew without bound")
+        if self.overflow:
+            parts.append(f"{self.overflow} starts settled on orbits beyond the first "
+                         f"{MAX_ATTRACTORS} distinct ones (left -1): a continuum of neutral "
+                         "orbits rather than attractors")
+        if self.p.c == 0.0 and self.p.r == 1.0:
+            parts.append("no dissipation (c = 0, r = 1): the section map preserves area, so "
+                         "nothing attracts; orbits found are neutral, not attractors")
         return "; ".join(parts) if parts else "complete"
 
 

@@ -176,3 +176,12 @@ def test_bad_input_names_the_field(kwargs, field):
 def test_starts_below_a_shifted_wall_are_refused():
     with pytest.raises(ValueError, match=r"x_range.*below the wall g=0.3"):
         il.basins(P262.replace(g=0.3), (0.0, 1.0), VR, n=(3, 3))
+
+
+def test_no_dissipation_is_said():
+    """c = 0, r = 1: the section map preserves area (det = r^2 exp(-2 c T / m) = 1), so
+    nothing can attract; the result says so instead of presenting attractors silently."""
+    b = il.basins(il.Params(c=0.0, r=1.0, omega=1.0), (0.0, 1.0), (-1.0, 1.0), n=(4, 4),
+                  max_periods=200)
+    assert "no dissipation" in b.message
+    assert b.complete
