@@ -185,3 +185,23 @@ def test_no_dissipation_is_said():
                   max_periods=200)
     assert "no dissipation" in b.message
     assert b.complete
+
+
+def test_period1_basin_ends_at_its_period_doubling():
+    """The closed-form multiplier of period-1 crosses -1 at omega = 2.6589 (r = 0.8):
+    just below, period-1 is among the attractors; just above it is not, and the
+    period-2 orbit born there is."""
+    from scipy.optimize import brentq
+
+    def f(w):
+        p = P262.replace(omega=w)
+        mus = [multipliers(p, *o) for o in period1_orbits(p)]
+        mu = min(mus, key=lambda m: np.abs(m).max())
+        return (mu.real.min() + 1.0) if np.all(np.abs(mu.imag) < 1e-9) else 1.0
+
+    w_pd = brentq(f, 2.64, 2.70, xtol=1e-6)
+    below = il.basins(P262.replace(omega=w_pd - 0.009), (0.0, 1.0), (-1.5, 1.5), n=(8, 8))
+    above = il.basins(P262.replace(omega=w_pd + 0.011), (0.0, 1.0), (-1.5, 1.5), n=(8, 8))
+    assert "1-impact period-1" in [a.label for a in below.attractors]
+    assert "1-impact period-1" not in [a.label for a in above.attractors]
+    assert "2-impact period-2" in [a.label for a in above.attractors]
