@@ -6,9 +6,10 @@ the n-period map's displacements |P_j - P_{j-n}| over the last n points are belo
 settling tolerance and so is each point's distance to its limit, estimated from the last
 three displacements as if the map were linear (:func:`_tail_error`: both multipliers
 count, so a slow mode that hardly moves the points is not mistaken for convergence).
-A settled start then stops: the work per start is its transient, not a fixed window.  Distinct periodic
-attractors are told apart by comparing their section points as SETS, within the sum of
-the two orbits' error bounds (times a safety factor); never by a tolerance on one point.
+A settled start then stops: the work per start is its transient, not a fixed window.
+Distinct periodic attractors are told apart by comparing their section points as SETS,
+within the sum of the two orbits' error bounds (times a safety factor); never by a
+tolerance on one point.
 Starts that have not settled after ``max_periods`` periods are grouped by the bounding box
 of their last ``n_window`` section points; one member of each group is classified by
 :func:`impactlib.classify` on a fresh record window, and a group becomes a chaotic
@@ -254,7 +255,8 @@ def settle_starts(sp, rate, hmax, phase, x0s, v0s, settle_tol, round_tol, set_fa
                     for j in range(k - n + 1 + d, k + 1):
                         p1 = j % size
                         p0 = (j - d) % size
-                        if max(abs(hx[p1] - hx[p0]), abs(hv[p1] - hv[p0])) > set_factor * err + round_tol:
+                        gap = max(abs(hx[p1] - hx[p0]), abs(hv[p1] - hv[p0]))
+                        if gap > set_factor * err + round_tol:
                             ok = False
                             break
                     if ok:
@@ -323,6 +325,7 @@ class BasinRows:
 
     start: int            # first row index (into v)
     labels: np.ndarray
+    periods: np.ndarray   # (rows, nx) forcing periods followed per start (the work spent)
     attractors: tuple
     rows_done: int
     rows_total: int
@@ -492,11 +495,10 @@ def _run_tasks(fn, args_list, workers):
 class _Registry:
     """Attractors found so far; labels are indices into ``items`` (append only)."""
 
-    def __init__(self, p, phase, n_window, limits):
+    def __init__(self, p, phase, n_window):
         self.p = p
         self.phase = phase
         self.n_window = n_window
-        self.limits = limits
         self.items: list[Attractor] = []
         self.groups: list[tuple] = []     # (box, attractor index or -1, verdict label)
         self.classified = 0
@@ -634,7 +636,7 @@ def _block(reg, sp, rate, hmax, phase, xs, v_rows, settle_tol, round_tol, huge, 
 def iter_basins(p: Params, x_range, v_range, n=(100, 100), phase: float = 0.0, *,
                 max_periods: int = 1000, n_window: int = 128, rows_per_block: int | None = None,
                 workers: int | None = None, time_limit: float | None = None,
-                limits: RunLimits = RunLimits(), _stats: dict | None = None):
+                limits: RunLimits = RunLimits()):
     """Stream the basins grid of :func:`basins` as blocks of finished rows.
 
     Yields :class:`BasinRows` in row order (rows of v, bottom first).  Stop iterating (or
@@ -644,11 +646,11 @@ def iter_basins(p: Params, x_range, v_range, n=(100, 100), phase: float = 0.0, *
     xr, vr, (nx, nv), phase = _check(p, x_range, v_range, n, phase, max_periods, n_window,
                                      time_limit)
     return _iter(p, xr, vr, nx, nv, phase, max_periods, n_window, rows_per_block, workers,
-                 time_limit, limits, _stats)
+                 time_limit, limits)
 
 
 def _iter(p, xr, vr, nx, nv, phase, max_periods, n_window, rows_per_block, workers,
-          time_limit, limits, stats):
+          time_limit, limits):
     tic = time.perf_counter()
     xs = np.linspace(*xr, nx)
     vs = np.linspace(*vr, nv)
@@ -658,7 +660,7 @@ def _iter(p, xr, vr, nx, nv, phase, max_periods, n_window, rows_per_block, worke
     huge = UNBOUNDED_FACTOR * scale
     per = rows_per_block or max(1, math.ceil(256 / nx))
     starts = list(range(0, nv, per))
-    reg = _Registry(p, phase, n_window, limits)
+    reg = _Registry(p, phase, n_window)
     common = (settle_tol, round_tol, huge, max_periods, n_window, limits.max_impacts,
               limits.max_steps)
     # probes spread over the grid, run first: a chaotic attractor they find is known to
@@ -692,12 +694,11 @@ def _iter(p, xr, vr, nx, nv, phase, max_periods, n_window, rows_per_block, worke
             reg.unbounded += int(np.sum(outcome == UNBOUNDED))
             rows = lab.reshape(-1, nx)
             done += rows.shape[0]
-            if stats is not None:
-                stats.setdefault("periods", []).append(used.reshape(-1, nx))
             if time_limit is not None and time.perf_counter() - tic > time_limit and done < nv:
                 stopped = True
-            yield BasinRows(start=a, labels=rows, attractors=tuple(reg.items), rows_done=done,
-                            rows_total=nv, message=reg.message(done, nv, stopped))
+            yield BasinRows(start=a, labels=rows, periods=used.reshape(-1, nx),
+                            attractors=tuple(reg.items), rows_done=done, rows_total=nv,
+                            message=reg.message(done, nv, stopped))
             if stopped:
                 break
     finally:
@@ -742,15 +743,13 @@ def basins(p: Params, x_range, v_range, n=(100, 100), phase: float = 0.0, *,
     tic = time.perf_counter()
     labels = np.full((nv, nx), -1, dtype=np.int64)
     periods = np.zeros((nv, nx), dtype=np.int64)
-    stats: dict = {}
     last = None
     for blk in _iter(p, xr, vr, nx, nv, phase, max_periods, n_window, None, workers,
-                     time_limit, limits, stats):
-        labels[blk.start:blk.start + blk.labels.shape[0]] = blk.labels
+                     time_limit, limits):
+        rows = slice(blk.start, blk.start + blk.labels.shape[0])
+        labels[rows] = blk.labels
+        periods[rows] = blk.periods
         last = blk
-    if stats.get("periods"):
-        got = np.concatenate(stats["periods"])
-        periods[:got.shape[0]] = got
     atts = last.attractors if last else ()
     counts = np.bincount(labels[labels >= 0], minlength=len(atts))[:len(atts)]
     total = labels.size
