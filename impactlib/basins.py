@@ -551,8 +551,9 @@ class _Registry:
         for s in range(box.shape[0]):
             g = next((g for g in self.groups if _box_match(g[0], box[s])), None)
             if not count:
+                # a probe: keep only a chaotic verdict (its short run may not have settled)
                 if g is None and self.classified < MAX_CLASSIFY:
-                    self._classify(box[s], fin[s])
+                    self._classify(box[s], fin[s], keep_other=False)
                 continue
             if g is None:
                 if self.classified >= MAX_CLASSIFY:
@@ -567,7 +568,7 @@ class _Registry:
             lab[s] = g[1]
         return lab
 
-    def _classify(self, box, fin):
+    def _classify(self, box, fin, keep_other=True):
         p = self.p
         t0, x0, v0 = float(fin[0]), max(float(fin[1]), p.g), float(fin[2])
         w = self.n_window * p.T
@@ -584,7 +585,8 @@ class _Registry:
             self.chaos_index.append(idx)
             self.chaos_boxes = np.vstack([self.chaos_boxes, np.asarray(box, dtype=float)])
         g = (tuple(box), idx, mo.label)
-        self.groups.append(g)
+        if idx >= 0 or keep_other:
+            self.groups.append(g)
         return g
 
     def message(self, rows_done, rows_total, stopped):
@@ -659,21 +661,26 @@ def _iter(p, xr, vr, nx, nv, phase, max_periods, n_window, rows_per_block, worke
     settle_tol, round_tol = SETTLE_RTOL * scale, ROUND_RTOL * scale
     huge = UNBOUNDED_FACTOR * scale
     per = rows_per_block or max(1, math.ceil(256 / nx))
-    starts = list(range(0, nv, per))
+    # one row first, for a quick first picture; then blocks of ``per`` rows
+    starts = [0] + list(range(1, nv, per)) if rows_per_block is None and nv > 1 else \
+        list(range(0, nv, per))
+    stops = starts[1:] + [nv]
     reg = _Registry(p, phase, n_window)
     common = (settle_tol, round_tol, huge, max_periods, n_window, limits.max_impacts,
               limits.max_steps)
-    # probes spread over the grid, run first: a chaotic attractor they find is known to
-    # every block from the start (its starts then stop after two windows)
+    # probes spread over the grid, run first for two windows: a chaotic attractor they
+    # find is known to every block from the start (its starts then stop after two windows)
     ix = np.unique([nx // 2, nx // 4, (3 * nx) // 4])
     iv = np.unique([nv // 2, nv // 4, (3 * nv) // 4])
     px, pv = np.meshgrid(xs[ix], vs[iv])
+    probe = (settle_tol, round_tol, huge, min(max_periods, 2 * n_window), n_window,
+             limits.max_impacts, limits.max_steps)
     outcome, *_, box, fin, _ = _block(reg, sp, rate, hmax, phase, px.ravel(), pv.ravel(),
-                                      *common, pairs=True)
+                                      *probe, pairs=True)
     un = outcome == UNSETTLED
     if un.any():
         reg.unsettled(box[un], fin[un], count=False)
-    args = [(reg, sp, rate, hmax, phase, xs, vs[a:a + per], *common) for a in starts]
+    args = [(reg, sp, rate, hmax, phase, xs, vs[a:b], *common) for a, b in zip(starts, stops)]
     done = 0
     stopped = False
     gen = _run_tasks(_block, args, workers)
