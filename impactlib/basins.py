@@ -14,8 +14,9 @@ Starts that have not settled after ``max_periods`` periods are grouped by the bo
 of their last ``n_window`` section points; one member of each group is classified by
 :func:`impactlib.classify` on a fresh record window, and a group becomes a chaotic
 attractor only when classify calls that run chaotic.  Once a chaotic attractor is known,
-later starts whose section points fill its box (two windows in) stop there instead of
-running to ``max_periods``.  Everything else is undecided (-1), with the reason in
+later starts stop at the end of the first window of ``n_window`` section points whose
+box matches it (a window still holding the transient is larger), instead of running to
+``max_periods``.  Everything else is undecided (-1), with the reason in
 ``message``.
 
 The grid runs in row blocks on the sweeps' shared thread pool (``nogil`` kernels);
@@ -160,8 +161,8 @@ def settle_starts(sp, rate, hmax, phase, x0s, v0s, settle_tol, round_tol, set_fa
     the periods run.
 
     ``chaos_boxes`` (q, 4) are the boxes of chaotic attractors already found: a start
-    not settled after two windows whose last window's box matches one of them (within
-    ``box_rtol`` of the extent, as :func:`_box_match`) stops there, outcome
+    not settled whose last window's box matches one of them (within ``box_rtol`` of the
+    extent, as :func:`_box_match`) stops at the end of that window, outcome
     ON_CHAOTIC + its row in chaos_boxes, instead of running to max_periods.
     """
     period = 2.0 * math.pi / sp[OM]
@@ -217,11 +218,10 @@ def settle_starts(sp, rate, hmax, phase, x0s, v0s, settle_tol, round_tol, set_fa
                 wbox[1] = -np.inf
                 wbox[2] = np.inf
                 wbox[3] = -np.inf
-                if k >= 2 * n_window:
-                    hit = _matching_box(box, chaos_boxes, box_rtol)
-                    if hit >= 0:
-                        res = ON_CHAOTIC + hit
-                        break
+                hit = _matching_box(box, chaos_boxes, box_rtol)
+                if hit >= 0:
+                    res = ON_CHAOTIC + hit
+                    break
             found = 0
             err = 0.0
             for n in range(1, max_period + 1):
@@ -669,7 +669,7 @@ def _iter(p, xr, vr, nx, nv, phase, max_periods, n_window, rows_per_block, worke
     common = (settle_tol, round_tol, huge, max_periods, n_window, limits.max_impacts,
               limits.max_steps)
     # probes spread over the grid, run first for two windows: a chaotic attractor they
-    # find is known to every block from the start (its starts then stop after two windows)
+    # find is known to every block from the start (its starts then stop after a window)
     ix = np.unique([nx // 2, nx // 4, (3 * nx) // 4])
     iv = np.unique([nv // 2, nv // 4, (3 * nv) // 4])
     px, pv = np.meshgrid(xs[ix], vs[iv])
