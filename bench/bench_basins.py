@@ -9,9 +9,11 @@ Scenes: r = 0.8 with omega = 2.62 (period-1 and 3-impact period-3 coexist), 2.64
 one (the ratio shows the pool's use of the cores), time to the first yielded block of
 ``iter_basins``, periods followed per start.  The alternative a user has without
 ``basins``: one ``simulate`` of the paper's 500 s per start and ``classify`` of it
-(timed on a spread subset in the same process, scaled to the grid).  All timings are
-wall-clock medians of ``time.perf_counter`` after a warm-up call (Numba compile or cache
-load) in this one process.
+(timed on a spread subset in the same process, scaled to the grid), compared by CPU time
+with ``basins`` on one worker (CPU time is less distorted by other jobs on a shared
+machine).  All timings are medians of ``time.perf_counter`` (wall) and
+``time.process_time`` (CPU) after a warm-up call (Numba compile or cache load) in this
+one process.
 """
 from __future__ import annotations
 
@@ -35,12 +37,15 @@ SCENES = [("r=0.8, omega=2.62", il.Params(r=0.8, omega=2.62)),
 
 
 def median_time(fn, repeats):
-    ts, out = [], None
+    """Median wall time, median CPU time of the process (all threads), last result."""
+    ts, cpu, out = [], [], None
     for _ in range(repeats):
+        c0 = time.process_time()
         tic = time.perf_counter()
         out = fn()
         ts.append(time.perf_counter() - tic)
-    return float(np.median(ts)), out
+        cpu.append(time.process_time() - c0)
+    return float(np.median(ts)), float(np.median(cpu)), out
 
 
 def first_rows(p):
@@ -73,23 +78,24 @@ def main():
     il.warmup()
     for name, p in SCENES:
         il.basins(p, XR, VR, n=(10, 10))                      # warm-up (compile or cache)
-        t_all, b = median_time(lambda: il.basins(p, XR, VR, n=N), repeats)
-        t_one, _ = median_time(lambda: il.basins(p, XR, VR, n=N, workers=1), repeats)
+        t_all, _, b = median_time(lambda: il.basins(p, XR, VR, n=N), repeats)
+        t_one, c_one, _ = median_time(lambda: il.basins(p, XR, VR, n=N, workers=1), repeats)
         t_first = float(np.median([first_rows(p)[0] for _ in range(repeats)]))
         _, blk = first_rows(p)
-        t_alt, _ = median_time(lambda: brute_force(p, n_alt), 1 if args.quick else 3)
-        t_alt_grid = t_alt * N[0] * N[1] / n_alt
+        _, c_alt, _ = median_time(lambda: brute_force(p, n_alt), 1 if args.quick else 3)
+        c_alt_grid = c_alt * N[0] * N[1] / n_alt
         print(f"\n{name}")
         print("  attractors: " + "; ".join(f"{a.label} {f:.1%}"
                                            for a, f in zip(b.attractors, b.fractions))
               + f"; undecided {b.undecided:.1%}; {b.message}")
         print(f"  whole grid, all workers   {t_all:8.3f} s")
-        print(f"  whole grid, 1 worker      {t_one:8.3f} s   (x{t_one / t_all:.2f} of all)")
+        print(f"  whole grid, 1 worker      {t_one:8.3f} s   (x{t_one / t_all:.2f} of all; "
+              f"CPU {c_one:.3f} s)")
         print(f"  first rows ({blk.labels.shape[0]} rows)     {t_first:8.3f} s")
         print(f"  periods per start         median {np.median(b.periods):.0f}, "
               f"mean {b.periods.mean():.0f}, max {b.periods.max()}")
-        print(f"  simulate(500 s)+classify  {t_alt_grid:8.3f} s for the grid, 1 thread "
-              f"(from {n_alt} starts; x{t_alt_grid / t_one:.1f} of basins on 1 worker)")
+        print(f"  simulate(500 s)+classify  CPU {c_alt_grid:.3f} s for the grid (from {n_alt} "
+              f"starts; x{c_alt_grid / c_one:.1f} the CPU time of basins on 1 worker)")
 
 
 if __name__ == "__main__":
