@@ -60,6 +60,8 @@ NEWTON_TOL = 1e-11
 NEWTON_MAX = 8
 EVENT_KINDS = ("period-doubling", "saddle-node", "neimark-sacker", "grazing")
 CLEARANCE_SAMPLES = 48
+MU_STEP = 0.2          # largest change of a multiplier per step while one is below MU_WATCH
+MU_WATCH = 3.0
 
 
 @jit
@@ -275,7 +277,15 @@ class _Problem:
         zp[-1] = lam + h
         zm = z.copy()
         zm[-1] = lam - h
-        J[:, -1] = (self.residual(zp) - self.residual(zm)) / (2.0 * h)
+        try:
+            fp = self.residual(zp)
+        except ValueError:      # at the edge of the valid range: one-sided
+            fp, zp = F, z
+        try:
+            fm = self.residual(zm)
+        except ValueError:
+            fm, zm = F, z
+        J[:, -1] = (fp - fm) / (zp[-1] - zm[-1])
         return F, J
 
     def describe(self, z):
@@ -401,6 +411,12 @@ def _check_branch(p, name, stop, n, x0, v0, phase, ds, max_points):
         problems.append(f"stop={stop!r} is not finite")
     elif stop_f == getattr(p, name):
         problems.append(f"stop={stop_f!r} equals the start value {name}={getattr(p, name)!r}")
+    else:
+        try:
+            p.replace(**{name: stop_f})
+        except ValueError as err:
+            problems.append(f"stop={stop_f!r} is outside the valid range of {name} "
+                            f"({str(err).removeprefix('invalid parameters: ')})")
     if ds is not None:
         try:
             dsf = float(ds)
@@ -451,7 +467,6 @@ def continuation(p: Params, name: str, stop: float, n: int = 1, x0: float | None
     lam0 = getattr(p, name)
     span = abs(stop - lam0)
     ds = span / 100.0 if ds is None else float(ds)
-    ds_max = max(ds, span / 15.0)
     ds_min = 1e-9 * max(1.0, span)
     orb = periodic_orbit(p, n, x0, v0, phase)
 
@@ -471,6 +486,8 @@ def continuation(p: Params, name: str, stop: float, n: int = 1, x0: float | None
         return empty("the orbit has no impact: the multi-segment problem needs impacts")
     prob = _Problem(p, name, n, m, float(phase))
     z = np.concatenate([orb.impact_times, orb.impact_velocities, [lam0]])
+    # the arclength counts the unknowns too: they may move much faster than the parameter
+    ds_max = max(ds, span / 15.0, float(np.linalg.norm(z[:-1])) / 15.0)
     # polish on the multi-segment problem (already converged to ~1e-12 by periodic_orbit)
     F, J = prob.jacobian(z)
     if np.max(np.abs(F)) > 1e-10:
@@ -508,8 +525,17 @@ def continuation(p: Params, name: str, stop: float, n: int = 1, x0: float | None
         if t[-1] * direction < 0:
             t = -t
     message = f"reached max_points={max_points}"
+    e_lam = np.zeros(z.size)
+    e_lam[-1] = 1.0
     while len(pts) < max_points:
-        z_new, its = _correct(prob, z + ds * t, t, ds, z)
+        lam_pred = z[-1] + ds * t[-1]
+        at_stop = (z[-1] - stop) * (lam_pred - stop) <= 0.0 and t[-1] != 0.0
+        if at_stop:
+            # this step reaches stop: land on it (Newton at the fixed parameter value)
+            frac = (stop - z[-1]) / (ds * t[-1])
+            z_new, its = _correct(prob, z + frac * ds * t, e_lam, stop, np.zeros(z.size))
+        else:
+            z_new, its = _correct(prob, z + ds * t, t, ds, z)
         t_new = None
         if z_new is not None:
             _, Jn = prob.jacobian(z_new)
@@ -518,17 +544,29 @@ def continuation(p: Params, name: str, stop: float, n: int = 1, x0: float | None
                 z_new = None
         if z_new is None:
             if ds <= ds_min:
-                message = "the corrector failed at the smallest step"
+                try:
+                    prob.params(z[-1] + ds_min * t[-1])
+                    message = "the corrector failed at the smallest step"
+                except ValueError:
+                    message = f"reached the edge of the valid range of {name}"
                 break
             ds = max(0.5 * ds, ds_min)
             continue
         x, v, mu, st, adm, tests = prob.describe(z_new)
+        mu_prev = pts[-1][3]
+        if (ds > ds_min and np.max(np.abs(mu - mu_prev)) > MU_STEP
+                and min(np.max(np.abs(mu)), np.max(np.abs(mu_prev))) < MU_WATCH):
+            # multipliers near the unit circle move little per step, so that no pair of
+            # events (a stability change and its reversal) hides inside one step
+            ds = max(0.5 * ds, ds_min)
+            continue
+        s_step = float(t @ (z_new - z))
         # events in this step, in the order they occur along it
         found = []
         for kind in EVENT_KINDS:
             a, b = tests_prev[kind], tests[kind]
             if math.isfinite(a) and math.isfinite(b) and (a > 0) != (b > 0) and a != 0.0:
-                ze = _locate(prob, z, t, ds, kind, a, b)
+                ze = _locate(prob, z, t, s_step, kind, a, b)
                 if ze is not None:
                     found.append((float(t @ (ze - z)), kind, ze))
         found.sort(key=lambda e: e[0])
@@ -543,17 +581,10 @@ def continuation(p: Params, name: str, stop: float, n: int = 1, x0: float | None
                 break
         if stop_here:
             break
-        lam_prev, lam_new = z[-1], z_new[-1]
-        if (lam_prev - stop) * (lam_new - stop) <= 0.0 and lam_new != lam_prev:
-            # the last point exactly at stop (Newton at fixed parameter)
-            e_lam = np.zeros(z.size)
-            e_lam[-1] = 1.0
-            frac = (stop - lam_prev) / (lam_new - lam_prev)
-            zs, _ = _correct(prob, z + frac * (z_new - z), e_lam, stop, np.zeros(z.size))
-            add(zs if zs is not None else z_new)
+        tests_prev = add(z_new)
+        if at_stop:
             message = f"reached {name} = {stop:g}"
             break
-        tests_prev = add(z_new)
         z, t = z_new, t_new
         if its <= 3:
             ds = min(ds * 1.4, ds_max)
