@@ -52,8 +52,8 @@ import numpy as np
 
 from ._jit import jit
 from .flight import G, K, M, OM, R, C_, flight_state, start_segment, system_constants
-from .model import PARAM_NAMES, Params
-from .orbits import _check_start, periodic_orbit
+from .model import Params
+from .orbits import check_start, periodic_orbit
 from .tangent import flow_jacobian
 
 NEWTON_TOL = 1e-11
@@ -401,7 +401,7 @@ def _locate(prob, z0, t0, s_hi, kind, f_lo, f_hi):
 
 
 def _check_branch(p, name, stop, n, x0, v0, phase, ds, max_points):
-    _check_start(p, name, n, x0, v0, phase)
+    check_start(p, name, n, x0, v0, phase)
     problems = []
     try:
         stop_f = float(stop)

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .model import PARAM_NAMES, Params, RunLimits, check_run
+from .model import PARAM_NAMES, Params, RunLimits
 from .simulate import run_constants, simulate
 from .tangent import tangent_run
 
@@ -58,7 +58,7 @@ class PeriodicOrbit:
     jacobian: np.ndarray
 
 
-def _check_start(p, name, n, x0, v0, phase):
+def check_start(p, name, n, x0, v0, phase):
     """One ValueError naming every bad field of an orbit or branch start."""
     problems = []
     if not isinstance(p, Params):
@@ -225,7 +225,7 @@ def periodic_orbit(p: Params, n: int = 1, x0: float | None = None, v0: float | N
         An orbit that sticks has the Jacobian 0 (the release state does not depend on
         the start), so its multipliers are both 0; ``sticks`` and ``message`` say so.
     """
-    _check_start(p, None, n, x0, v0, phase)
+    check_start(p, None, n, x0, v0, phase)
     n = int(n)
     phase = float(phase)
     f = MapEval(p, n, phase)
