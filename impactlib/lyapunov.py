@@ -4,8 +4,8 @@ The tangent matrix J follows the exact trajectory: between impacts J <- Phi(s) J
 closed-form flow Jacobian), at an impact J <- S J (the saltation matrix), at a sticking
 phase J <- 0 (see :mod:`impactlib.tangent`).  After every impact and at the edges of the
 sub-windows J is re-orthonormalised, J = Q R, J <- Q, and log|R11|, log|R22| are summed
-(Benettin et al. 1980 with the discontinuity handled as in Müller 1995).  Over the record
-window [t_record, t_end] of length tau,
+(Benettin et al., Meccanica 15 (1980) 9-20, with the impacts handled as in Müller 1995).
+Over the record window [t_record, t_end] of length tau,
 
     lambda_i = (1 / tau) sum log|R_ii|,
 
