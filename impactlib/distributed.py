@@ -63,7 +63,7 @@ def _bifurcation_task(p, name, values, kwargs):
 
 def _regime_task(p, name_x, values_x, name_y, values_y, kwargs):
     rm = _local_regime_map(p, name_x, values_x, name_y, values_y, workers=1, **kwargs)
-    return rm.impacts, rm.period, rm.status
+    return rm.impacts, rm.period, rm.status, rm.motions
 
 
 # ---------------------------------------------------------------- client side
@@ -169,8 +169,10 @@ def regime_map(client, p: Params, name_x: str, values_x, name_y: str, values_y,
     impacts = np.concatenate([b[0] for b in blocks])
     period = np.concatenate([b[1] for b in blocks])
     status = np.concatenate([b[2] for b in blocks])
+    motions = {(iy + a, ix): mo
+               for (a, _), b in zip(edges, blocks) for (iy, ix), mo in b[3].items()}
     return RegimeMap(name_x, vx, name_y, vy, impacts, period, status,
-                     time.perf_counter() - tic)
+                     time.perf_counter() - tic, motions)
 
 
 __all__ = ["bifurcation", "regime_map"]

@@ -157,7 +157,11 @@ def lyapunov_from(p, t0, x0, v0, t_end, t_record, windows=WINDOWS,
         sub = logs / np.diff(marks)[:, None]
         order = np.argsort(-total, kind="stable")
         exps = total[order]
-        err = sub[:, order].std(axis=0, ddof=1) / math.sqrt(logs.shape[0])
+        # an exponent of -inf (r = 0: every impact's saltation matrix is singular) has no
+        # spread to estimate
+        with np.errstate(invalid="ignore"):
+            err = sub[:, order].std(axis=0, ddof=1) / math.sqrt(logs.shape[0])
+        err = np.where(np.isfinite(exps), err, 0.0)
         msg = f"averaged over [{t_record:g}, {t_end:g}] ({n_m} impacts)"
     return Lyapunov(params=p, exponents=exps, error=err, n_impacts=int(n_m), nu=nu,
                     window=(t_record, t_end), sticks=stuck, unbounded=bool(unbounded),

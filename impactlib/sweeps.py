@@ -13,15 +13,16 @@ import os
 import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
 
 from ._jit import jit
 from .flight import RES, system_constants_rows
-from .classify import MAX_PERIOD, PERIOD_RTOL, describe, motion_class
+from .classify import MAX_PERIOD, PERIOD_RTOL, Motion, classify, describe, motion_class
 from .model import PARAM_NAMES, Params, RunLimits, check_run, fastest_rate, flow_rate
-from .simulate import HMAX_PERIODS, METHOD_IDS, run_kernel
+from .simulate import HMAX_PERIODS, METHOD_IDS, run_kernel, simulate
 
 CAP_PER_VALUE = 4096        # impacts kept per value; more are counted, flagged in status
 _POOL_LOCK = threading.Lock()
@@ -143,7 +144,13 @@ class Bifurcation:
 @dataclass(frozen=True)
 class RegimeMap:
     """(m, n) class of each cell of a two-parameter grid; -1 stands for infinity, -2 for
-    undetermined (window too short), 0 impacts for no impact."""
+    undetermined (window too short), 0 impacts for no impact, m = -3 not settled.
+
+    Cells whose section points never repeat are judged by :func:`classify` on their own
+    run (the Lyapunov criterion): ``motions[(iy, ix)]`` holds its verdict, and their codes
+    become (m, -1) chaotic, (-3, -1) not settled, (-2, -2) undetermined or (-4, -1)
+    unbounded.  :meth:`motion` and :meth:`label` read both.
+    """
 
     name_x: str
     values_x: np.ndarray
@@ -153,9 +160,30 @@ class RegimeMap:
     period: np.ndarray        # (ny, nx) n codes
     status: np.ndarray        # (ny, nx)
     elapsed: float
+    motions: dict = dataclasses.field(default_factory=dict)   # (iy, ix) -> classify's Motion
+
+    def motion(self, iy: int, ix: int) -> Motion:
+        got = self.motions.get((int(iy), int(ix)))
+        return got if got is not None else describe(int(self.impacts[iy, ix]),
+                                                    int(self.period[iy, ix]))
 
     def label(self, iy: int, ix: int) -> str:
-        return describe(int(self.impacts[iy, ix]), int(self.period[iy, ix])).label
+        return self.motion(iy, ix).label
+
+
+# codes of classify's verdicts on aperiodic cells (RegimeMap)
+_VERDICT_CODES = {"not settled": (-3, -1), "undetermined": (-2, -2), "unbounded": (-4, -1)}
+
+
+def _judge_aperiodic(p, name_x, xs, name_y, y, iy, codes, motions, run_kw):
+    """classify() of a single run for each cell of row iy whose points never repeated:
+    whether it is chaotic is classify's call (one rule, the Lyapunov criterion)."""
+    for ix in np.nonzero((codes[:, 1] == -1) & (codes[:, 0] != 0))[0]:
+        sol = simulate(p.replace(**{name_x: float(xs[ix]), name_y: float(y)}), **run_kw)
+        mo = classify(sol)
+        if mo.kind != "chaotic":
+            codes[ix] = _VERDICT_CODES.get(mo.kind, (-2, -2))
+        motions[(iy, int(ix))] = mo
 
 
 def _check_sweep(p, names, t_end, t_record, x0, v0, method, dt, rtol, atol):
@@ -376,6 +404,9 @@ def regime_map(p: Params, name_x: str, values_x, name_y: str, values_y,
     impacts = np.zeros((vy.size, vx.size), dtype=np.int64)
     period = np.zeros_like(impacts)
     status = np.zeros_like(impacts)
+    motions: dict = {}
+    run_kw = dict(t_end=t_end, t_record=t_record, method=method, x0=x0, v0=v0, dt=dt,
+                  rtol=rtol, atol=atol, max_impacts=max_impacts, max_steps=max_steps)
 
     def task(iy0, iy1):
         for iy in range(iy0, iy1):
@@ -387,10 +418,12 @@ def regime_map(p: Params, name_x: str, values_x, name_y: str, values_y,
                 sps, hmaxs, rates, method=method, x0s=x0s, v0=v0, t_end=t_end,
                 t_record=t_record, dt=dt, rtol=rtol, atol=atol, classify=True, warm=False,
                 cap=512, max_impacts=max_impacts, max_steps=max_steps)
+            _judge_aperiodic(p, name_x, vx, name_y, vy[iy], iy, cls, motions, run_kw)
             impacts[iy], period[iy], status[iy] = cls[:, 0], cls[:, 1], st
 
     ex = _executor(workers)
     futs = [ex.submit(task, a, b) for a, b in _split(vy.size, max(1, vy.size // rows_per_task))]
     for f in futs:
         f.result()
-    return RegimeMap(name_x, vx, name_y, vy, impacts, period, status, time.perf_counter() - tic)
+    return RegimeMap(name_x, vx, name_y, vy, impacts, period, status, time.perf_counter() - tic,
+                     motions)

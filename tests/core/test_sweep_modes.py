@@ -138,3 +138,17 @@ def test_diagram_in_r_warm_start_both_directions():
     np.testing.assert_array_equal(bif.v[(bif.index == 0) & (bif.direction == 1)], sol.impacts.v)
     sol = il.simulate(PAPER.replace(r=0.9), t_end=T_END, t_record=T_REC)
     np.testing.assert_array_equal(bif.v[(bif.index == 7) & (bif.direction == -1)], sol.impacts.v)
+
+
+def test_regime_map_cell_with_plastic_impacts_is_judged_without_warnings():
+    """r = 0, omega = 4.834: the points never repeat, so classify measures the Lyapunov
+    exponents; with r = 0 every impact's saltation matrix is singular (det = r^2 = 0), so
+    an exponent can be -inf, and its error estimate must not turn into NaN warnings
+    (which pytest raises as errors here)."""
+    sol = il.simulate(PAPER.replace(omega=4.8338983050847455, r=0.0), t_end=T_END,
+                      t_record=T_REC)
+    mo = il.classify(sol)
+    assert mo.kind in ("chaotic", "not settled", "undetermined")
+    rm = il.regime_map(PAPER, "omega", [4.8338983050847455], "r", [0.0], t_end=T_END,
+                       t_record=T_REC)
+    assert rm.label(0, 0) == mo.label
