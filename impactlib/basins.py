@@ -297,7 +297,8 @@ class Attractor:
     ``points`` are its section points, (k, 2) columns (x, v): the n points of a periodic
     orbit in time order, or for a chaotic attractor the record window of the run classify
     judged.  ``error`` bounds the distance of a periodic orbit's points from the true
-    orbit; ``box`` is (x_min, x_max, v_min, v_max).
+    orbit; ``box`` is (x_min, x_max, v_min, v_max); ``lyapunov`` and ``lyapunov_error``
+    are the largest exponent classify measured on a chaotic attractor (NaN otherwise).
     """
 
     label: str            # e.g. "3-impact period-3", "chaotic (∞-impact period-∞)"
@@ -307,6 +308,8 @@ class Attractor:
     points: np.ndarray
     error: float
     box: tuple
+    lyapunov: float = math.nan
+    lyapunov_error: float = math.nan
 
     def same_orbit(self, points: np.ndarray, error: float) -> bool:
         """Whether a periodic orbit's points are this one's, compared as sets."""
@@ -581,7 +584,9 @@ class _Registry:
             P = np.column_stack([sol.poincare.x, sol.poincare.v])
             cbox = (P[:, 0].min(), P[:, 0].max(), P[:, 1].min(), P[:, 1].max())
             idx = self._add(Attractor(label=mo.label, kind="chaotic", impacts=mo.impacts,
-                                      period=mo.period, points=P, error=math.nan, box=cbox))
+                                      period=mo.period, points=P, error=math.nan, box=cbox,
+                                      lyapunov=getattr(mo, "lyapunov", math.nan),
+                                      lyapunov_error=getattr(mo, "lyapunov_error", math.nan)))
             self.chaos_index.append(idx)
             self.chaos_boxes = np.vstack([self.chaos_boxes, np.asarray(box, dtype=float)])
         g = (tuple(box), idx, mo.label)

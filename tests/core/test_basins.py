@@ -118,6 +118,7 @@ def test_chaotic_attractor_is_one_entry():
     a = b.attractors[0]
     assert a.kind == "chaotic" and a.impacts == math.inf and a.period == math.inf
     assert np.all(b.labels == 0)
+    assert a.lyapunov > 2 * a.lyapunov_error > 0      # classify's measured criterion
     sol = _long_run(il.Params(omega=2.8), 0.5, 0.0)
     assert il.classify(sol).kind == "chaotic"
     x0, x1, v0, v1 = a.box
