@@ -175,15 +175,25 @@ class RegimeMap:
 _VERDICT_CODES = {"not settled": (-3, -1), "undetermined": (-2, -2), "unbounded": (-4, -1)}
 
 
-def _judge_aperiodic(p, name_x, xs, name_y, y, iy, codes, motions, run_kw):
-    """classify() of a single run for each cell of row iy whose points never repeated:
-    whether it is chaotic is classify's call (one rule, the Lyapunov criterion)."""
-    for ix in np.nonzero((codes[:, 1] == -1) & (codes[:, 0] != 0))[0]:
-        sol = simulate(p.replace(**{name_x: float(xs[ix]), name_y: float(y)}), **run_kw)
-        mo = classify(sol)
+def judge_aperiodic(p, name_x, vx, name_y, vy, impacts, period, workers, **run_kw):
+    """classify() of a single run (settings ``run_kw``) for each cell of a regime map
+    whose points never repeated: whether it is chaotic is classify's call (one rule, the
+    Lyapunov criterion).  Updates the codes in place; returns {(iy, ix): Motion}."""
+    cells = np.argwhere((period == -1) & (impacts != 0))
+
+    def judge(iy, ix):
+        sol = simulate(p.replace(**{name_x: float(vx[ix]), name_y: float(vy[iy])}), **run_kw)
+        return classify(sol)
+
+    ex = _executor(workers)
+    futs = [ex.submit(judge, iy, ix) for iy, ix in cells]
+    motions = {}
+    for (iy, ix), fut in zip(cells, futs):
+        mo = fut.result()
         if mo.kind != "chaotic":
-            codes[ix] = _VERDICT_CODES.get(mo.kind, (-2, -2))
-        motions[(iy, int(ix))] = mo
+            impacts[iy, ix], period[iy, ix] = _VERDICT_CODES.get(mo.kind, (-2, -2))
+        motions[(int(iy), int(ix))] = mo
+    return motions
 
 
 def _check_sweep(p, names, t_end, t_record, x0, v0, method, dt, rtol, atol):
@@ -404,9 +414,6 @@ def regime_map(p: Params, name_x: str, values_x, name_y: str, values_y,
     impacts = np.zeros((vy.size, vx.size), dtype=np.int64)
     period = np.zeros_like(impacts)
     status = np.zeros_like(impacts)
-    motions: dict = {}
-    run_kw = dict(t_end=t_end, t_record=t_record, method=method, x0=x0, v0=v0, dt=dt,
-                  rtol=rtol, atol=atol, max_impacts=max_impacts, max_steps=max_steps)
 
     def task(iy0, iy1):
         for iy in range(iy0, iy1):
@@ -418,12 +425,15 @@ def regime_map(p: Params, name_x: str, values_x, name_y: str, values_y,
                 sps, hmaxs, rates, method=method, x0s=x0s, v0=v0, t_end=t_end,
                 t_record=t_record, dt=dt, rtol=rtol, atol=atol, classify=True, warm=False,
                 cap=512, max_impacts=max_impacts, max_steps=max_steps)
-            _judge_aperiodic(p, name_x, vx, name_y, vy[iy], iy, cls, motions, run_kw)
             impacts[iy], period[iy], status[iy] = cls[:, 0], cls[:, 1], st
 
     ex = _executor(workers)
     futs = [ex.submit(task, a, b) for a, b in _split(vy.size, max(1, vy.size // rows_per_task))]
     for f in futs:
         f.result()
+    motions = judge_aperiodic(p, name_x, vx, name_y, vy, impacts, period, workers,
+                              t_end=t_end, t_record=t_record, method=method, x0=x0, v0=v0,
+                              dt=dt, rtol=rtol, atol=atol, max_impacts=max_impacts,
+                              max_steps=max_steps)
     return RegimeMap(name_x, vx, name_y, vy, impacts, period, status, time.perf_counter() - tic,
                      motions)
