@@ -134,17 +134,32 @@ class Served:
 
 
 def websocket_status(port: int, origin: str | None, path: str = "/app/ws",
-                     host: str | None = None) -> int:
+                     host: str | None = None, session: bool = False) -> int | None:
     """HTTP status of a websocket upgrade request sent with this Origin (and Host)
-    header: 101 switches protocols, 403 is Bokeh refusing the origin."""
+    header: 101 switches protocols, 403 is Bokeh refusing the origin, None a connection
+    closed without an answer. ``session=True`` sends a session token as a page does
+    (an admitted socket then opens a session instead of failing Bokeh's protocol check)."""
     key = base64.b64encode(os.urandom(16)).decode()
     lines = [f"GET {path} HTTP/1.1", f"Host: {host or f'localhost:{port}'}", "Upgrade: websocket",
              "Connection: Upgrade", f"Sec-WebSocket-Key: {key}", "Sec-WebSocket-Version: 13"]
+    if session:
+        import json
+
+        payload = {"session_id": base64.urlsafe_b64encode(os.urandom(33)).decode(),
+                   "session_expiry": int(time.time()) + 300}
+        token = base64.urlsafe_b64encode(json.dumps(payload).encode()).decode().rstrip("=")
+        lines.append(f"Sec-WebSocket-Protocol: bokeh, {token}")
     if origin is not None:
         lines.append(f"Origin: {origin}")
     with socket.create_connection(("127.0.0.1", port), timeout=30) as s:
         s.sendall(("\r\n".join(lines) + "\r\n\r\n").encode())
-        return int(s.recv(4096).split(b"\r\n", 1)[0].split()[1])
+        head = s.recv(4096)
+        status = int(head.split(b"\r\n", 1)[0].split()[1]) if head else None
+        if status == 101:
+            time.sleep(1.0)                            # let the session open, then
+            s.sendall(b"\x88\x80" + os.urandom(4))     # close it (masked close frame)
+            time.sleep(0.3)
+        return status
 
 
 # -- Bokeh client sessions ------------------------------------------------------------
