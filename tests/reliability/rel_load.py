@@ -14,6 +14,13 @@ resident memory (VmRSS of its process) before, during and after.
 Run standalone for the full classroom figures (they go into RELIABILITY.md):
 
     .venv/bin/python tests/reliability/rel_load.py --sessions 24 --seconds 60 --rounds 2 --write
+
+and for the classroom targets (sequential sessions, a burst of 30, 30 active sessions;
+one process, --num-procs 2 and nginx + 2 processes; RELIABILITY.md section 8):
+
+    .venv/bin/python tests/reliability/rel_load.py --targets --write
+    .venv/bin/python tests/reliability/rel_load.py --targets --url http://HOST:PORT/app \
+        --server-pgid PGID          # any served page; CPU and RSS of that process group
 """
 from __future__ import annotations
 
