@@ -17,7 +17,7 @@ from pathlib import Path
 
 import pytest
 
-from test_app_browser import READY, STATE
+from test_app_browser import JS, READY, STATE, handle
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "reliability"))
 from rel_proxy import NGINX_CONF, ProxiedApp, Proxy, nginx_binary  # noqa: E402
@@ -155,4 +155,45 @@ def test_a_browser_page_keeps_to_one_backend(page, proxied):
     mine = [e for e in log if e["route"] == route]
     assert {e["backend"] for e in mine} == {page_hits[0]["backend"]}, mine
     assert sockets[0] in mine              # the WebSocket reached the page's backend
+    assert proxied.bad_log_lines() == []
+
+
+def test_a_page_reconnects_through_a_restarted_proxy_to_its_own_session(page, proxied):
+    """nginx restarted (every connection through it dropped): the page's reconnect
+    carries its route cookie back to the backend that holds its session. Landing on the
+    other backend would give it a fresh session there, with r back at its default."""
+    page.goto(proxied.url)
+    page.wait_for_function(READY, timeout=60_000, polling=100)
+    page.evaluate(JS)
+    r = handle(page, "r")
+    r.focus()
+    for _ in range(3):
+        r.press("ArrowLeft")
+    page.wait_for_function("() => ie.title('bifurcation_figure').includes('r = 0.77,') && "
+                           "ie.title('bifurcation_figure').includes('complete')",
+                           timeout=30_000)
+    page.evaluate("() => { window.__ieNoReload = true; }")
+    disp = page.evaluate("ie.data('displacement').x.length + ':' + ie.sum('displacement', 'x')")
+
+    def sockets_opened():
+        return sum(b.log().count("WebSocket connection opened") for b in proxied.backends)
+
+    opened = sockets_opened()
+    proxied.proxy.stop()                    # every connection through nginx drops
+    time.sleep(3.0)
+    proxied.proxy = Proxy(proxied.port, [b.port for b in proxied.backends])
+    deadline = time.monotonic() + 40        # Panel retries after 1, 2, 4, 8 ... s
+    while sockets_opened() == opened and time.monotonic() < deadline:
+        time.sleep(0.2)
+    assert sockets_opened() > opened, "the page never reconnected"
+    omega = handle(page, "omega")
+    omega.focus()
+    for _ in range(5):
+        omega.press("ArrowRight")
+    page.wait_for_function(
+        "() => Math.abs(ie.model('bifurcation_marker').location - 2.05) < 1e-9 && "
+        f"ie.data('displacement').x.length + ':' + ie.sum('displacement', 'x') !== {disp!r}",
+        timeout=60_000)
+    assert page.evaluate("() => window.__ieNoReload === true"), "the page was reloaded"
+    assert "r = 0.77," in page.evaluate("ie.title('bifurcation_figure')")
     assert proxied.bad_log_lines() == []
