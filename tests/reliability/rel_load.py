@@ -284,7 +284,10 @@ def run(sessions: int, seconds: float, rounds: int = 2, bif_n: int = 400,
         offset = srv.log_offset()
         objects_before = sessions_gone(srv, explorers=0)
         baseline = _settle(srv, 30)
-        done = [_round(srv, sessions, seconds, bif_n, stagger, objects_before["Explorer"])
+        # sliders move for ``seconds`` once every page is complete: under load connecting
+        # alone can take longer than a short round
+        done = [_round(srv, sessions, seconds, bif_n, stagger, objects_before["Explorer"],
+                       together=True)
                 for _ in range(rounds)]
         logs = [lg for r in done for lg in r["logs"]]
         lat = [x for lg in logs for x in lg.latencies]
@@ -627,8 +630,9 @@ def markdown(res: dict) -> str:
     return "\n".join([
         f"- machine: {res['machine']}; server and the {res['sessions']} client sessions on "
         "the same machine (loopback), clients as Bokeh client sessions in one process",
-        f"- {res['rounds']} rounds of {res['sessions']} concurrent sessions, each session "
-        f"{res['seconds']:g} s (staggered start, {res['wall']:g} s in all), default diagram "
+        f"- {res['rounds']} rounds of {res['sessions']} concurrent sessions, each moving "
+        f"sliders for {res['seconds']:g} s once all are complete (staggered start, "
+        f"{res['wall']:g} s in all), default diagram "
         f"of {res['bif_n']} ω values: {res['updates']} scene updates, {res['diagrams']} "
         f"diagram recomputes",
         f"- scene update latency (slider change sent → displacement data applied in the "

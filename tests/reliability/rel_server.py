@@ -214,7 +214,7 @@ def websocket_status(port: int, origin: str | None, path: str = "/app/ws",
         s.sendall(("\r\n".join(lines) + "\r\n\r\n").encode())
         head = s.recv(4096)
         status = int(head.split(b"\r\n", 1)[0].split()[1]) if head else None
-        if status == 101:
+        if status == 101 and session:
             time.sleep(1.0)                            # let the session open, then
             s.sendall(b"\x88\x80" + os.urandom(4))     # close it (masked close frame)
             time.sleep(0.3)
