@@ -4,8 +4,14 @@
 #   docker run --rm -p 127.0.0.1:5006:5006 impact-explorer
 #   docker run --rm -p 8080:5006 -e IMPACT_ALLOWED_ORIGINS=example.org,example.org:8080 impact-explorer
 #
+#   docker run --rm -p 127.0.0.1:5006:5006 -e IMPACT_PROCS=2 impact-explorer
+#
 # IMPACT_ALLOWED_ORIGINS: comma-separated host[:port] origins allowed to open the app's
-# websocket (default localhost:5006). "*" or an empty value is refused at start.
+# websocket (default localhost:5006). "*" or an empty value is refused at start. Behind
+# a reverse proxy these are the names the browsers use (the proxy's), not the container's.
+# IMPACT_PROCS: server processes (panel serve --num-procs, default 1), each with its own
+# sessions and caches; give the container that many CPUs. Anything but a whole number
+# >= 1 is refused at start (0 would let Tornado take the host's core count).
 # The process runs as uid 10001 and writes only to /var/cache/impact (its HOME, the
 # Numba cache warmed at build time, Matplotlib's config and TMPDIR), so the image also
 # runs with a read-only root: --read-only -v impact-cache:/var/cache/impact.
@@ -22,7 +28,8 @@ ENV PATH="${VIRTUAL_ENV}/bin:${PATH}" \
     NUMBA_CACHE_DIR="${IMPACT_CACHE}/numba" \
     NUMBA_CPU_NAME=generic \
     MPLCONFIGDIR="${IMPACT_CACHE}/matplotlib" \
-    IMPACT_ALLOWED_ORIGINS=localhost:5006
+    IMPACT_ALLOWED_ORIGINS=localhost:5006 \
+    IMPACT_PROCS=1
 
 # Debian's own Python 3.11 (python3 3.11.2-1+b1 is bookworm's for its whole life; the
 # interpreter under it takes Debian's security updates). ca-certificates is left to track
@@ -68,5 +75,6 @@ HEALTHCHECK --interval=30s --timeout=5s --start-period=60s --retries=3 \
     CMD ["python", "-c", "import urllib.request; urllib.request.urlopen('http://127.0.0.1:5006/liveness', timeout=4)"]
 
 # No --admin, no --autoreload, no --dev. Each origin in IMPACT_ALLOWED_ORIGINS becomes one
-# --allow-websocket-origin; a "*" anywhere or an empty list stops the start with code 64.
-CMD ["/bin/sh", "-c", "case \"${IMPACT_ALLOWED_ORIGINS}\" in ''|*'*'*) echo 'IMPACT_ALLOWED_ORIGINS must list host[:port] origins; empty or * is refused' >&2; exit 64;; esac; set -f; IFS=','; set --; for o in ${IMPACT_ALLOWED_ORIGINS}; do set -- \"$@\" --allow-websocket-origin \"$o\"; done; exec panel serve app/app.py --address 0.0.0.0 --port 5006 --liveness \"$@\""]
+# --allow-websocket-origin; a "*" anywhere or an empty list stops the start with code 64,
+# and so does an IMPACT_PROCS that is not a whole number >= 1.
+CMD ["/bin/sh", "-c", "case \"${IMPACT_ALLOWED_ORIGINS}\" in ''|*'*'*) echo 'IMPACT_ALLOWED_ORIGINS must list host[:port] origins; empty or * is refused' >&2; exit 64;; esac; case \"${IMPACT_PROCS}\" in ''|*[!0-9]*|0*) echo 'IMPACT_PROCS must be a whole number of server processes, 1 or more' >&2; exit 64;; esac; set -f; IFS=','; set --; for o in ${IMPACT_ALLOWED_ORIGINS}; do set -- \"$@\" --allow-websocket-origin \"$o\"; done; exec panel serve app/app.py --address 0.0.0.0 --num-procs \"${IMPACT_PROCS}\" --port 5006 --liveness \"$@\""]

@@ -14,7 +14,9 @@ from app.serving import (  # noqa: E402
 
 def create_app() -> Explorer:
     """A new, independent session: settings from the URL, its own views and workers."""
-    pn.extension(notifications=False)
+    # a dropped websocket reconnects to the same server session (kept for
+    # --unused-session-lifetime): settings and views survive a Wi-Fi hiccup
+    pn.extension(notifications=False, reconnect=True)
     quiet_closed_sockets()
     quiet_rejected_values()
     deliver_stranded_writes()

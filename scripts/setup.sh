@@ -1,5 +1,7 @@
 #!/usr/bin/env bash
-# Create .venv and install the project. With --browser also install Debian's Chromium.
+# Create .venv and install the project. With --browser also install Debian's Chromium and
+# nginx (the browser tests drive the app through scripts/nginx.conf; nginx only runs in
+# the foreground on loopback ports there, the package's system service is left alone).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 extras="${EXTRAS:-}"
@@ -12,9 +14,21 @@ if [ -n "$extras" ]; then
 else
     .venv/bin/python -m pip install -q --disable-pip-version-check -e .
 fi
-if [ "${1:-}" = "--browser" ] && [ ! -x /usr/bin/chromium ]; then
-    SUDO=""
-    [ "$(id -u)" -eq 0 ] || SUDO="sudo"
-    $SUDO apt-get update -qq
-    DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq chromium >/dev/null
+if [ "${1:-}" = "--browser" ]; then
+    missing=""
+    [ -x /usr/bin/chromium ] || missing="chromium"
+    command -v nginx >/dev/null || [ -x /usr/sbin/nginx ] || missing="$missing nginx-light"
+    if [ -n "$missing" ]; then
+        SUDO=""
+        [ "$(id -u)" -eq 0 ] || SUDO="sudo"
+        $SUDO apt-get update -qq
+        # policy-rc.d 101: the package may not start its system service here
+        if [ ! -e /usr/sbin/policy-rc.d ]; then
+            printf '#!/bin/sh\nexit 101\n' | $SUDO tee /usr/sbin/policy-rc.d >/dev/null
+            $SUDO chmod +x /usr/sbin/policy-rc.d
+            trap '$SUDO rm -f /usr/sbin/policy-rc.d' EXIT
+        fi
+        # shellcheck disable=SC2086
+        DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq $missing >/dev/null
+    fi
 fi

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Set up (if needed, including Debian's Chromium) and run the whole test suite.
+# Set up (if needed, including Debian's Chromium and nginx) and run the whole test suite.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 EXTRAS=test,dask bash scripts/setup.sh --browser

@@ -3,7 +3,8 @@
 `parse` turns a Dockerfile into instructions (continuation lines joined, comments
 dropped, `# hadolint ignore=` pragmas kept); `walk` follows ENV, ARG, WORKDIR and USER
 through them the way a builder does; `problems` lists every broken promise of the
-container (non-root, health check, pinned base, origins from configuration, port,
+container (non-root, health check, pinned base, origins and process count from
+configuration, port,
 warmed Numba cache, pinned installs). The tests run `problems` on the real Dockerfile
 and on broken copies of it, so every check is seen to fail when it should.
 """
@@ -254,11 +255,18 @@ def problems(text: str) -> list[str]:
             found.append("CMD does not take the websocket origins from IMPACT_ALLOWED_ORIGINS")
         if re.search(r"""--allow-websocket-origin[= ]+["']?\*""", cmd):
             found.append("CMD allows websocket origin *")
+        if not re.search(r'--num-procs[= ]+"?\$\{?IMPACT_PROCS\b', cmd):
+            found.append("CMD does not take its process count (--num-procs) from IMPACT_PROCS")
     origins = env.get("IMPACT_ALLOWED_ORIGINS")
     if origins is None:
         found.append("no default IMPACT_ALLOWED_ORIGINS in ENV")
     elif "*" in origins or not origins.strip():
         found.append(f"default IMPACT_ALLOWED_ORIGINS={origins!r} is open or empty")
+    procs = env.get("IMPACT_PROCS")
+    if procs is None:
+        found.append("no default IMPACT_PROCS in ENV")
+    elif not (procs.isdigit() and int(procs) >= 1):
+        found.append(f"default IMPACT_PROCS={procs!r} is not a whole number >= 1")
     if "*" in env.get("BOKEH_ALLOW_WS_ORIGIN", ""):
         found.append("BOKEH_ALLOW_WS_ORIGIN allows *")
 

@@ -80,6 +80,10 @@ BREAKAGES = [
     ("pip cache kept", lambda t: t.replace("install --no-cache-dir", "install"), "--no-cache-dir"),
     ("editable install", lambda t: t.replace('--disable-pip-version-check "${IMPACT_SRC}"', '--disable-pip-version-check -e "${IMPACT_SRC}"'), "editable"),
     ("unpinned extra", lambda t: t.replace('--disable-pip-version-check "${IMPACT_SRC}"', '--disable-pip-version-check "${IMPACT_SRC}" requests'), "not pinned"),
+    ("process count fixed", lambda t: t.replace('--num-procs \\"${IMPACT_PROCS}\\"', "--num-procs 2"), "IMPACT_PROCS"),
+    ("no process count", lambda t: t.replace('--num-procs \\"${IMPACT_PROCS}\\" ', ""), "--num-procs"),
+    ("no default process count", lambda t: t.replace(" \\\n    IMPACT_PROCS=1", ""), "no default IMPACT_PROCS"),
+    ("zero processes by default", lambda t: t.replace("IMPACT_PROCS=1", "IMPACT_PROCS=0"), "IMPACT_PROCS='0'"),
     ("rule silenced", lambda t: t.replace("hadolint ignore=DL3008", "hadolint ignore=DL3008,DL3002"), "DL3002"),
 ]
 
@@ -113,12 +117,21 @@ def fake_panel(tmp_path):
     return bindir
 
 
-def run_cmd(fake_panel: Path, origins: str | None) -> subprocess.CompletedProcess:
+DEFAULT = object()
+
+
+def run_cmd(fake_panel: Path, origins: str | None, procs=DEFAULT, instructions=INSTRUCTIONS):
+    """The CMD with the image's ENV defaults, IMPACT_ALLOWED_ORIGINS and IMPACT_PROCS
+    as given (None: unset)."""
     env = {"PATH": f"{fake_panel}:/usr/bin:/bin"}
     if origins is not None:
         env["IMPACT_ALLOWED_ORIGINS"] = origins
+    if procs is DEFAULT:
+        procs = spec.final_env(instructions).get("IMPACT_PROCS")
+    if procs is not None:
+        env["IMPACT_PROCS"] = procs
     return subprocess.run(
-        spec.serve_command(INSTRUCTIONS), env=env, capture_output=True, text=True, timeout=30
+        spec.serve_command(instructions), env=env, capture_output=True, text=True, timeout=30
     )
 
 
@@ -156,6 +169,39 @@ def test_cmd_refuses_a_wildcard_or_empty_origin(fake_panel, origins):
     assert run.returncode == 64
     assert "IMPACT_ALLOWED_ORIGINS" in run.stderr
     assert run.stdout == ""  # panel was never started
+
+
+def test_cmd_serves_one_process_by_default(fake_panel):
+    assert spec.final_env(INSTRUCTIONS)["IMPACT_PROCS"] == "1"
+    args = run_cmd(fake_panel, "localhost:5006").stdout.splitlines()
+    assert args[args.index("--num-procs") + 1] == "1"
+
+
+@pytest.mark.parametrize("procs", ["2", "16"])
+def test_cmd_passes_the_process_count(fake_panel, procs):
+    run = run_cmd(fake_panel, "localhost:5006", procs)
+    assert run.returncode == 0, run.stderr
+    args = run.stdout.splitlines()
+    assert args.count("--num-procs") == 1 and args[args.index("--num-procs") + 1] == procs
+
+
+BAD_PROCS = ["0", "00", "02", "-1", "abc", "2x", "1 2", "1.5", "", None]
+
+
+@pytest.mark.parametrize("procs", BAD_PROCS)
+def test_cmd_refuses_a_bad_process_count(fake_panel, procs):
+    run = run_cmd(fake_panel, "localhost:5006", procs)
+    assert run.returncode == 64
+    assert "IMPACT_PROCS" in run.stderr
+    assert run.stdout == ""  # panel was never started
+
+
+def test_the_process_count_refusal_can_fail(fake_panel):
+    """Without its guard the CMD hands a bad count to panel: the test above would fail."""
+    guard = re.search(r'case \\"\$\{IMPACT_PROCS\}\\" in .*?esac; ', TEXT).group(0)
+    broken = spec.parse(TEXT.replace(guard, ""))
+    run = run_cmd(fake_panel, "localhost:5006", "abc", instructions=broken)
+    assert run.returncode == 0 and "abc" in run.stdout.splitlines()
 
 
 def test_healthcheck_fails_when_nothing_answers():

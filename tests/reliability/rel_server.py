@@ -133,18 +133,92 @@ class Served:
                 self.proc.wait(10)
 
 
+# -- a server's processes, from /proc --------------------------------------------------
+
+_TICK = os.sysconf("SC_CLK_TCK")
+
+
+def _stat_fields(pid: str) -> list[str] | None:
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            text = f.read()
+    except OSError:
+        return None
+    return text[text.rindex(")") + 2:].split()       # fields from 3 (state) on
+
+
+def group_pids(pgids) -> list[int]:
+    """Every live process in these process groups (a server started with
+    start_new_session=True and the workers it forks)."""
+    pgids = {int(g) for g in pgids}
+    out = []
+    for pid in os.listdir("/proc"):
+        if pid.isdigit():
+            fields = _stat_fields(pid)
+            if fields and int(fields[2]) in pgids:
+                out.append(int(pid))
+    return out
+
+
+def process_cpu_s(pid: int) -> float:
+    """User + system CPU seconds of one process (0 once it is gone)."""
+    fields = _stat_fields(str(pid))
+    return sum(int(x) for x in fields[11:13]) / _TICK if fields else 0.0
+
+
+def group_cpu_s(pgids) -> float:
+    """User + system CPU seconds of every live process in the groups, including the
+    children they have waited for."""
+    total = 0
+    for pid in group_pids(pgids):
+        fields = _stat_fields(str(pid))
+        if fields:                       # utime stime cutime cstime: fields 14-17
+            total += sum(int(x) for x in fields[11:15])
+    return total / _TICK
+
+
+def group_rss_mb(pgids) -> float:
+    """Summed VmRSS of every live process in the groups, MB (forked workers share
+    pages with their parent until written, so this counts shared pages twice)."""
+    total = 0.0
+    for pid in group_pids(pgids):
+        try:
+            with open(f"/proc/{pid}/status") as f:
+                for line in f:
+                    if line.startswith("VmRSS:"):
+                        total += int(line.split()[1]) / 1024.0
+        except OSError:
+            pass
+    return total
+
+
 def websocket_status(port: int, origin: str | None, path: str = "/app/ws",
-                     host: str | None = None) -> int:
+                     host: str | None = None, session: bool = False) -> int | None:
     """HTTP status of a websocket upgrade request sent with this Origin (and Host)
-    header: 101 switches protocols, 403 is Bokeh refusing the origin."""
+    header: 101 switches protocols, 403 is Bokeh refusing the origin, None a connection
+    closed without an answer. ``session=True`` sends a session token as a page does
+    (an admitted socket then opens a session instead of failing Bokeh's protocol check)."""
     key = base64.b64encode(os.urandom(16)).decode()
     lines = [f"GET {path} HTTP/1.1", f"Host: {host or f'localhost:{port}'}", "Upgrade: websocket",
              "Connection: Upgrade", f"Sec-WebSocket-Key: {key}", "Sec-WebSocket-Version: 13"]
+    if session:
+        import json
+
+        payload = {"session_id": base64.urlsafe_b64encode(os.urandom(33)).decode(),
+                   "session_expiry": int(time.time()) + 300}
+        token = base64.urlsafe_b64encode(json.dumps(payload).encode()).decode().rstrip("=")
+        lines.append(f"Sec-WebSocket-Protocol: bokeh, {token}")
     if origin is not None:
         lines.append(f"Origin: {origin}")
     with socket.create_connection(("127.0.0.1", port), timeout=30) as s:
         s.sendall(("\r\n".join(lines) + "\r\n\r\n").encode())
-        return int(s.recv(4096).split(b"\r\n", 1)[0].split()[1])
+        head = s.recv(4096)
+        status = int(head.split(b"\r\n", 1)[0].split()[1]) if head else None
+        if status == 101 and session:
+            time.sleep(1.0)                            # let the session open, then
+            s.sendall(b"\x88\x80" + os.urandom(4))     # close it (masked close frame)
+            time.sleep(0.3)
+        return status
 
 
 # -- Bokeh client sessions ------------------------------------------------------------

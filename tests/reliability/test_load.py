@@ -1,21 +1,26 @@
 """A classroom on one server: concurrent sessions moving sliders (see rel_load.py).
 
 CI runs a small classroom (RELIABILITY_SESSIONS, default 6, for RELIABILITY_LOAD_SECONDS,
-default 12 s, twice); the full classroom (24 sessions, 60 s, twice) is run with
-``tests/reliability/rel_load.py --write`` and its figures are in RELIABILITY.md.
-Loopback only; every client and the server stop by themselves.
+default 12 s, twice) and the targets' sequential and burst scenarios at that size; the
+full classroom (24 sessions, 60 s, twice) is run with ``tests/reliability/rel_load.py
+--write``, the full targets (30 sessions, three deployments) with ``rel_load.py --targets
+--write``; their figures are in RELIABILITY.md. Loopback only; every client and the
+server stop by themselves.
 """
 from __future__ import annotations
 
 import gc
 import json
 import os
+import subprocess
+import sys
 import time
 import weakref
 
 import pytest
 
-from rel_load import RESULTS, markdown, run
+from rel_load import RESULTS, markdown, run, run_targets
+from rel_server import group_cpu_s, group_rss_mb
 
 SESSIONS = int(os.environ.get("RELIABILITY_SESSIONS", "6"))
 SECONDS = float(os.environ.get("RELIABILITY_LOAD_SECONDS", "12"))
@@ -68,6 +73,69 @@ def test_closed_sessions_are_freed_and_memory_stays_bounded(classroom):
     assert first <= peak + 1
     grown = max(peak - base, 1.0)
     assert second - first <= 0.25 * grown + 8, (base, peak, res["rss_after_mb"])
+
+
+@pytest.fixture(scope="module")
+def targets():
+    res = run_targets(("single",), ("sequential", "burst"), sequential=2, burst=SESSIONS)
+    RESULTS.mkdir(parents=True, exist_ok=True)
+    (RESULTS / f"targets-{SESSIONS}.json").write_text(json.dumps(res, indent=1))
+    return res["runs"][0]
+
+
+@pytest.mark.timeout(900)
+def test_sessions_one_after_another_and_in_a_burst_all_complete(targets):
+    """The targets' scenarios at CI size: every session gets five views with data and a
+    complete diagram (within 60 s of the burst's start), the server log stays clean and
+    the figures the load script reports are there. The figures themselves (CPU per
+    session, models) are recorded by the full run, not asserted here."""
+    seq, burst = targets["sequential"], targets["burst"]
+    assert seq["errors"] == [] and burst["errors"] == [], (seq["errors"], burst["errors"])
+    assert burst["complete"] == SESSIONS and burst["hung_threads"] == 0
+    assert burst["complete_within_60_s"] == SESSIONS, burst
+    assert burst["connect_to_five_views_s"]["max"] <= burst["connect_to_complete_s"]["max"]
+    assert len(seq["cpu_each_s"]) == 2 and all(c > 0 for c in seq["cpu_each_s"])
+    # the server cannot have used more CPU than its cores had in the burst's wall time
+    assert 0 < burst["server_cpu_s"] <= burst["wall_s"] * os.cpu_count()
+    assert len(seq["models"]) == 1 and seq["models"] == burst["models"]  # one page, one size
+    assert targets["bad_log_lines"] == []
+
+
+_BURN = """
+import os, sys, time
+blob = bytearray(int(sys.argv[1]) * 2**20)       # resident: every page written
+for i in range(0, len(blob), 4096):
+    blob[i] = 1
+t = time.process_time()
+while time.process_time() - t < float(sys.argv[2]):
+    pass
+print(time.process_time(), flush=True)
+sys.stdin.readline()
+"""
+
+
+def test_process_group_cpu_and_memory_match_what_the_processes_report():
+    """The load script's server measures (process-group CPU and RSS from /proc) against
+    a process group that reports its own: a parent that writes 150 MB and burns 0.4 s
+    of CPU, with a child (60 MB, 0.3 s); each reports its own total process_time
+    (start-up included), the parent the sum, while both still live."""
+    parent = ("import subprocess, sys\n"
+              f"child = subprocess.Popen([sys.executable, '-c', {_BURN!r}, '60', '0.3'], "
+              "stdout=subprocess.PIPE, stdin=subprocess.PIPE, text=True)\n"
+              "c = float(child.stdout.readline())\n"
+              + _BURN.replace("print(time.process_time(), flush=True)",
+                              "print(time.process_time() + c, flush=True)"))
+    proc = subprocess.Popen([sys.executable, "-c", parent, "150", "0.4"], text=True,
+                            stdout=subprocess.PIPE, stdin=subprocess.PIPE,
+                            start_new_session=True)
+    try:
+        reported = float(proc.stdout.readline())
+        cpu, rss = group_cpu_s([proc.pid]), group_rss_mb([proc.pid])
+    finally:
+        proc.communicate("\n", timeout=30)
+    assert reported >= 0.7
+    assert abs(cpu - reported) <= 0.1 + 0.05 * reported, (cpu, reported)  # start-up and ticks
+    assert 150 + 60 <= rss <= 150 + 60 + 2 * 60, rss      # two interpreters: < 60 MB each
 
 
 def test_a_session_is_garbage_once_its_links_are_released():
