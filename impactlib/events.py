@@ -18,11 +18,27 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from ._jit import jit
-from .flight import (C_, CPH, G, H0, HV0, K, M, OM, R, SPH, V0, W0SQ, X0, derivative_bounds,
-                     flight_state, release_time, wall_force)
+from .flight import (C_, CPH, G, H0, HV0, K, M, OM, R, RES, SPH, T0, V0, W0SQ, X0,
+                     derivative_bounds, flight_state, release_time, wall_force)
 
 EPS = 2.220446049250313e-16
+#: Longest certified step, in forcing periods.  At exact resonance the bound on the
+#: secular term grows with the step, so the cap is shorter there.
+HMAX_PERIODS = 0.5
+HMAX_PERIODS_RESONANCE = 0.25
+
+
+
+def step_caps(sps):
+    """The step cap hmax of the impact search for each row of system constants ``sps``
+    (one row, or an (n, NSP) array), in time units."""
+    sps = np.asarray(sps)
+    periods = np.where(sps[..., RES] != 0.0, HMAX_PERIODS_RESONANCE, HMAX_PERIODS)
+    return periods * 2.0 * math.pi / sps[..., OM]
+
 
 # next_impact outcomes
 NO_IMPACT, IMPACT, STEP_LIMIT = 0, 1, 2
@@ -177,7 +193,7 @@ def next_impact(sp, seg, s_end, hmax, max_steps):
             return NO_IMPACT, s_end, v, nsteps
         x, v, a, j, rh, xs = flight_state(sp, seg, s)
         nsteps += 1
-    t0 = abs(seg[0])
+    t0 = abs(seg[T0])
     while True:
         f = x - g
         tol = 8.0 * EPS * (xs + abs(g))
@@ -277,4 +293,4 @@ def phase_of(t, om):
     return ph
 
 
-__all__ = ["safe_step", "next_impact", "impact_outcome", "phase_of", "OM"]
+__all__ = ["safe_step", "next_impact", "impact_outcome", "phase_of", "step_caps", "OM"]

@@ -8,13 +8,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from ._jit import jit
-from .events import FLY, IMPACT, NO_IMPACT, STEP_LIMIT, STICK, impact_outcome, next_impact
-from .flight import G, R, RES, flight_state, release_time, start_segment, system_constants, wall_force
+from .events import (FLY, HMAX_PERIODS, IMPACT, NO_IMPACT, STEP_LIMIT, STICK, impact_outcome,
+                     next_impact, step_caps)
+from .flight import G, R, T0, flight_state, release_time, start_segment, system_constants
 from .integrators import advance_rk4, advance_rk45
 from .model import Params, RunLimits, check_run
 
 METHOD_IDS = {"exact": 0, "rk4": 1, "rk45": 2}
-HMAX_PERIODS = 0.5        # longest certified step, in forcing periods (1/4 at resonance)
 TAIL_TOL = 1e-6          # a chatter is summed once one hop lasts under this many time scales
 
 # run status codes (Solution.status)
@@ -30,7 +30,7 @@ MESSAGES = {
 @jit
 def _sample_segment(sp, seg, t_hi, ts, xs, vs, i):
     while i < ts.shape[0] and ts[i] <= t_hi:
-        x, v, a, j, rh, sc = flight_state(sp, seg, ts[i] - seg[0])
+        x, v, a, j, rh, sc = flight_state(sp, seg, ts[i] - seg[T0])
         xs[i] = x
         vs[i] = v
         i += 1
@@ -68,7 +68,7 @@ def run_kernel(sp, method, t, x, v, t_end, t_record, hmax, rate, dt, rtol, atol,
     nsteps = 0
     ip = 0
     idn = 0
-    status = 0
+    status = OK
     stuck = False
     h45 = min(0.01 / rate, hmax)
     # the initial state may be on the wall
@@ -134,7 +134,7 @@ def run_kernel(sp, method, t, x, v, t_end, t_record, hmax, rate, dt, rtol, atol,
             # reached t_end, or stopped at the step limit: (th, xh, vend) is where
             t, x, v = th, xh, vend
             if kind == STEP_LIMIT:
-                status = 2
+                status = STEP_LIMIT_HIT
             break
         # impact at th with velocity vh <= 0
         t = th
@@ -161,13 +161,13 @@ def run_kernel(sp, method, t, x, v, t_end, t_record, hmax, rate, dt, rtol, atol,
         else:
             v = vplus
         if n_tot >= max_impacts:
-            status = 1
+            status = IMPACT_LIMIT
             break
         if nsteps >= max_steps:
-            status = 2
+            status = STEP_LIMIT_HIT
             break
-    if status == 0 and n_rec > cap:
-        status = 3
+    if status == OK and n_rec > cap:
+        status = OUTPUT_FULL
     return status, n_rec, n_tot, n_stick, n_tail, t, x, v, stuck, nsteps
 
 
@@ -220,20 +220,26 @@ class Solution:
         return self.status == OK
 
 
-def section_times(t_record, t_end, phase, period):
-    """Times phase + n T inside [t_record, t_end]."""
-    n0 = math.ceil((t_record - phase) / period - 1e-12)
-    n1 = math.floor((t_end - phase) / period + 1e-12)
-    ts = phase + period * np.arange(n0, n1 + 1, dtype=np.float64)
-    return ts[(ts >= t_record - 1e-9 * period) & (ts <= t_end + 1e-9 * period)]
+@jit
+def section_times(t_lo, t_hi, phase, period):
+    """Poincare section times phase + n T inside [t_lo, t_hi] (a period's 1e-9 of slack
+    at the ends, so a section on an end is kept despite rounding)."""
+    n0 = math.ceil((t_lo - phase) / period - 1e-12)
+    n1 = math.floor((t_hi - phase) / period + 1e-12)
+    out = np.empty(max(0, n1 - n0 + 1))
+    n = 0
+    for i in range(out.shape[0]):
+        t = phase + period * (n0 + i)
+        if t_lo - 1e-9 * period <= t <= t_hi + 1e-9 * period:
+            out[n] = t
+            n += 1
+    return out[:n]
 
 
 def run_constants(p: Params):
     """(sp, rate, hmax) of one run; sweeps.py builds the same for many rows at once."""
     sp = system_constants(p.m, p.c, p.k, p.g, p.r, p.omega)
-    rate = p.rate()
-    hmax = (0.25 if sp[RES] else HMAX_PERIODS) * p.T
-    return sp, rate, hmax
+    return sp, p.rate(), float(step_caps(sp))
 
 
 def simulate(p: Params, t_end: float = 500.0, x0: float | None = None, v0: float = 0.0,

@@ -18,10 +18,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from ._jit import jit
-from .flight import RES, system_constants_rows
 from .classify import MAX_PERIOD, PERIOD_RTOL, describe, motion_class
-from .model import PARAM_NAMES, Params, RunLimits, check_run, fastest_rate, flow_rate
-from .simulate import HMAX_PERIODS, METHOD_IDS, run_kernel
+from .events import step_caps
+from .flight import G, OM, system_constants_rows
+from .model import PARAM_NAMES, Params, RunLimits, check_run, fastest_rate, rk4_stability_limits
+from .simulate import METHOD_IDS, run_kernel, section_times
 
 CAP_PER_VALUE = 4096        # impacts kept per value; more are counted, flagged in status
 _POOL_LOCK = threading.Lock()
@@ -59,17 +60,6 @@ def _executor(workers):
 
 
 @jit
-def _section_times(t_lo, t_hi, period):
-    n0 = math.ceil(t_lo / period - 1e-12)
-    n1 = math.floor(t_hi / period + 1e-12)
-    n = max(0, n1 - n0 + 1)
-    out = np.empty(n)
-    for i in range(n):
-        out[i] = (n0 + i) * period
-    return out
-
-
-@jit
 def sweep_kernel(sps, method, x0s, v0, t_end, t_record, hmaxs, rates, dt, rtol, atol,
                  out_t, out_v, counts, status, finals, classes, classify, warm,
                  max_impacts, max_steps):
@@ -85,18 +75,18 @@ def sweep_kernel(sps, method, x0s, v0, t_end, t_record, hmaxs, rates, dt, rtol, 
     x, v, t0 = x0s[0], v0, 0.0
     for i in range(nvals):
         sp = sps[i]
-        om = sp[5]
+        om = sp[OM]
         period = 2.0 * math.pi / om
         if not warm:
             x = x0s[i]
         elif i > 0:
             x = finals[i - 1, 1]
             v = finals[i - 1, 2]
-            ph = sps[i - 1, 5] * finals[i - 1, 0]
+            ph = sps[i - 1, OM] * finals[i - 1, 0]
             ph = ph - 2.0 * math.pi * math.floor(ph / (2.0 * math.pi))
             t0 = ph / om
         if classify:
-            pc_t = _section_times(t0 + t_record, t0 + t_end, period)
+            pc_t = section_times(t0 + t_record, t0 + t_end, 0.0, period)
         else:
             pc_t = empty
         pc_x = np.full(pc_t.shape[0], np.nan)
@@ -199,16 +189,16 @@ def _param_rows(p, columns, method, dt, x0):
     if x0 is not None and x0 < full["g"].max():
         problems.append(f"x0={x0!r} is behind the endstop g={full['g'].max()!r}")
     if method == "rk4" and not problems:
-        lam = flow_rate(full["m"], full["c"], full["k"])
-        worst = int(np.argmax(lam))
-        if dt * lam[worst] > 2.78:
-            problems.append(f"dt={dt!r} exceeds the RK4 stability limit {2.78 / lam[worst]:.4g} at "
+        lims = rk4_stability_limits(full["m"], full["c"], full["k"])
+        worst = int(np.argmin(lims))
+        if dt > lims[worst]:
+            problems.append(f"dt={dt!r} exceeds the RK4 stability limit {lims[worst]:.4g} at "
                             + ", ".join(f"{k}={v[worst]!r}" for k, v in columns.items()))
     if problems:
         raise ValueError("invalid sweep values: " + "; ".join(dict.fromkeys(problems)))
     sps = system_constants_rows(*(np.ascontiguousarray(full[f]) for f in PARAM_NAMES))
     rates = fastest_rate(full["m"], full["c"], full["k"], full["omega"])
-    hmaxs = np.where(sps[:, RES] != 0.0, 0.25, HMAX_PERIODS) * 2.0 * math.pi / full["omega"]
+    hmaxs = step_caps(sps)
     return sps, hmaxs, rates
 
 
@@ -285,7 +275,7 @@ def bifurcation(p: Params, name: str, values, t_end: float = 500.0, t_record: fl
     ex = _executor(workers)
     n = values.size
     sps, hmaxs, rates = _param_rows(p, {name: values}, method, dt, x0)
-    T_of = 2 * math.pi / sps[:, 5]
+    T_of = 2 * math.pi / sps[:, OM]
     if x0 is not None:
         x0s = np.full(n, x0c)
     elif name == "g":
@@ -372,7 +362,7 @@ def regime_map(p: Params, name_x: str, values_x, name_y: str, values_y,
             sps, hmaxs, rates = _param_rows(p, {name_x: vx, name_y: np.full(vx.size, vy[iy])},
                                             method, dt, x0)
             # each cell starts at x0, or at rest on its own wall (max(0, g))
-            x0s = np.full(vx.size, x_start) if x0 is not None else np.maximum(0.0, sps[:, 3])
+            x0s = np.full(vx.size, x_start) if x0 is not None else np.maximum(0.0, sps[:, G])
             _, _, _, st, _, cls = _run_rows(
                 sps, hmaxs, rates, method=method, x0s=x0s, v0=v0, t_end=t_end,
                 t_record=t_record, dt=dt, rtol=rtol, atol=atol, classify=True, warm=False,
