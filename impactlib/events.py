@@ -34,10 +34,16 @@ HMAX_PERIODS_RESONANCE = 0.25
 
 def step_caps(sps):
     """The step cap hmax of the impact search for each row of system constants ``sps``
-    (one row, or an (n, NSP) array), in time units."""
+    (one row, or an (n, NSP) array), in time units; :func:`step_cap` for one row in a kernel."""
     sps = np.asarray(sps)
     periods = np.where(sps[..., RES] != 0.0, HMAX_PERIODS_RESONANCE, HMAX_PERIODS)
     return periods * 2.0 * math.pi / sps[..., OM]
+
+
+@jit
+def step_cap(sp):
+    periods = HMAX_PERIODS_RESONANCE if sp[RES] != 0.0 else HMAX_PERIODS
+    return periods * 2.0 * math.pi / sp[OM]
 
 
 # next_impact outcomes
@@ -293,4 +299,4 @@ def phase_of(t, om):
     return ph
 
 
-__all__ = ["safe_step", "next_impact", "impact_outcome", "phase_of", "step_caps", "OM"]
+__all__ = ["safe_step", "next_impact", "impact_outcome", "phase_of", "step_caps", "step_cap", "OM"]

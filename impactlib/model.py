@@ -172,7 +172,8 @@ def check_run(p: Params, *, t_end, t_record, x0, v0, phase, method, dt, rtol, at
     if method not in METHODS:
         problems.append(f"method={method!r} is unknown; expected one of {', '.join(METHODS)}")
     t_end = _as_float("t_end", t_end, problems)
-    t_record = _as_float("t_record", t_record, problems)
+    # t_record defaults to half the run (the paper's 250 of 500); nan if t_end is bad
+    t_record = 0.5 * t_end if t_record is None else _as_float("t_record", t_record, problems)
     x0 = max(0.0, p.g) if x0 is None else _as_float("x0", x0, problems)
     v0 = _as_float("v0", v0, problems)
     phase = _as_float("phase", phase, problems)
