@@ -8,14 +8,16 @@ from dataclasses import dataclass
 import numpy as np
 
 from ._jit import jit
-from .events import (FLY, HMAX_PERIODS, IMPACT, NO_IMPACT, STEP_LIMIT, STICK, impact_outcome,
-                     next_impact, step_cap)
+from .events import (FLY, HMAX_PERIODS, IMPACT, NGRID, NO_IMPACT, STEP_LIMIT, STICK,
+                     impact_outcome, next_impact, next_impact_grid, search_grid, step_cap)
 from .flight import (G, R, T0, fastest_rate, flight_state, release_time, start_segment,
                      system_constants)
 from .integrators import advance_rk4, advance_rk45
 from .model import Params, RunLimits, check_run
 
 METHOD_IDS = {"exact": 0, "rk4": 1, "rk45": 2}
+HOP_MEMORY = 8           # hops remembered for predicting the next one
+HOP_MATCH_RTOL = 1e-3    # ... if it left the wall this close in speed
 TAIL_TOL = 1e-6          # a chatter is summed once one hop lasts under this many time scales
 
 # run status codes (Solution.status)
@@ -72,6 +74,12 @@ def run_kernel(sp, method, t, x, v, t_end, t_record, hmax, rate, dt, rtol, atol,
     status = OK
     stuck = False
     h45 = min(0.01 / rate, hmax)
+    grid = search_grid(sp, rate) if method == 0 else np.zeros(NGRID)
+    # the last hops (rebound speed, length): a hop that left the wall as fast as this one
+    # predicts its length (periodic orbits repeat them)
+    hop_v = np.full(HOP_MEMORY, -1.0)
+    hop_s = np.zeros(HOP_MEMORY)
+    n_hop = 0
     # the initial state may be on the wall
     if x <= g:
         x = g
@@ -113,7 +121,18 @@ def run_kernel(sp, method, t, x, v, t_end, t_record, hmax, rate, dt, rtol, atol,
         started_at_rest = False
         if method == 0:
             seg = start_segment(sp, t, x, v)
-            kind, s, vh, ns = next_impact(sp, seg, t_end - t, hmax, max_steps - nsteps)
+            guess = -1.0
+            best = HOP_MATCH_RTOL * v
+            for jh in range(HOP_MEMORY):
+                if abs(hop_v[jh] - v) < best:
+                    best = abs(hop_v[jh] - v)
+                    guess = hop_s[jh]
+            kind, s, vh, ns = next_impact_grid(sp, seg, t_end - t, hmax, max_steps - nsteps,
+                                               grid, guess)
+            if kind == IMPACT and v > 0.0:
+                hop_v[n_hop % HOP_MEMORY] = v
+                hop_s[n_hop % HOP_MEMORY] = s
+                n_hop += 1
             th = t + s
             ip = _sample_segment(sp, seg, th, pc_t, pc_x, pc_v, ip)
             idn = _sample_segment(sp, seg, th, d_t, d_x, d_v, idn)
