@@ -21,7 +21,7 @@ import math
 import numpy as np
 
 from ._jit import jit
-from .flight import (C_, CPH, FA, G, H0, HV0, K, M, NSEG, OM, PP, QQ, R, RES, SPH, T0, V0,
+from .flight import (ALPHA, C_, CPH, FA, G, H0, HV0, K, M, NSEG, OM, PP, QQ, R, RES, SPH, T0, V0,
                      W0SQ, X0, derivative_bounds, flight_state, release_time, wall_force)
 
 EPS = 2.220446049250313e-16
@@ -256,6 +256,122 @@ def search_from(sp, seg, s, x, v, a, rh, xs, s_end, hmax, max_steps, nsteps):
             return STEP_LIMIT, s, v, nsteps
 
 
+# ------------------------------------------------------------ short hops
+
+#: degree of the Taylor polynomial of a short hop (short_hop)
+SHORT_HOP_ORDER = 8
+
+
+@jit
+def short_hop(sp, seg, s_end):
+    """A short hop from the wall (chatter), from the Taylor polynomial of x at its start.
+
+    The derivatives of x at the start follow from Eq. (1) itself (x'' = (cos(omega t) -
+    2 c x' - k x) / m, differentiated), no closed-form evaluation; the remainder after
+    degree N = SHORT_HOP_ORDER is at most R tau^(N+1), R = M / (N+1)!, M bounding
+    |x^(N+1)| (homogeneous energy bound plus FA omega^(N+1), as flight.derivative_bounds).
+    f = x - g lies between p - R tau^(N+1) and p + R tau^(N+1), p the polynomial; the
+    lower one is shown positive before its first root tau_lo (Bernstein coefficients of
+    (p - R tau^(N+1)) / tau on [0, tau_lo]), so no earlier root; the upper one's root
+    tau_hi bounds the root from above.  The hop is accepted only when tau_hi - tau_lo and
+    the velocity's remainder are at rounding level.
+
+    Returns (ok, s, v): the impact time into the segment and the velocity before it;
+    ok False (nothing decided) for a start not on the wall, a hop that is not short
+    enough, or exact resonance.
+    """
+    g = sp[G]
+    x0 = seg[X0]
+    u = seg[V0]
+    if x0 != g or not u > 0.0 or sp[RES] != 0.0:
+        return False, 0.0, 0.0
+    m, c, k, om = sp[M], sp[C_], sp[K], sp[OM]
+    n = SHORT_HOP_ORDER
+    # Taylor coefficients a[j] = x^(j) / j! of f at the start (a[0] = 0)
+    e = np.empty(n + 1)
+    e[0] = x0
+    e[1] = u
+    cph, sph = seg[CPH], seg[SPH]
+    fj = 1.0
+    for j in range(n - 1):
+        # j-th derivative of cos(omega t): omega^j (cos, -sin, -cos, sin)[j mod 4]
+        r4 = j % 4
+        trig = cph if r4 == 0 else (-sph if r4 == 1 else (-cph if r4 == 2 else sph))
+        e[j + 2] = (fj * trig - 2.0 * c * e[j + 1] - k * e[j]) / m
+        fj *= om
+    if not e[2] < 0.0:
+        return False, 0.0, 0.0
+    a = np.empty(n + 1)
+    a[0] = 0.0
+    fact = 1.0
+    for j in range(1, n + 1):
+        fact *= j
+        a[j] = e[j] / fact
+    # remainder bound: homogeneous derivatives b_j, forcing FA omega^j
+    alpha, w0sq = sp[ALPHA], sp[W0SQ]
+    rh = math.sqrt(seg[HV0] * seg[HV0] + w0sq * seg[H0] * seg[H0])
+    b_prev = rh
+    b = rh * (2.0 * alpha + math.sqrt(w0sq))
+    for j in range(3, n + 2):
+        b_prev, b = b, 2.0 * alpha * b + w0sq * b_prev
+    rem = (b + sp[FA] * om ** (n + 1)) / (fact * (n + 1))
+    # tau_lo: Newton on q(tau) = (p - rem tau^(n+1)) / tau from the parabola's root
+    tau = 2.0 * u / -e[2]
+    tau_lo = tau_hi = 0.0
+    if not tau < s_end:
+        return False, 0.0, 0.0
+    for sign in (-1.0, 1.0):
+        for _ in range(30):
+            q = sign * rem
+            dq = 0.0
+            for j in range(n, 0, -1):
+                dq = dq * tau + q
+                q = q * tau + a[j]
+            # q = sum a_j tau^(j-1) + sign rem tau^n, dq its derivative
+            if not dq < 0.0:
+                return False, 0.0, 0.0
+            step = q / dq
+            tau -= step
+            if not (0.0 < tau < s_end):
+                return False, 0.0, 0.0
+            if abs(step) <= EPS * tau:
+                break
+        if sign < 0.0:
+            tau_lo = tau * (1.0 - 4.0 * EPS)
+        else:
+            tau_hi = tau * (1.0 + 4.0 * EPS)
+    if tau_hi - tau_lo > 2.0 * EPS * (abs(seg[T0]) + tau_lo):
+        return False, 0.0, 0.0
+    # no earlier root: Bernstein coefficients of q_lo on [0, tau_lo] all positive
+    # (coefficients c_i = a_(i+1) tau_lo^i, c_n = -rem tau_lo^n; degree n polynomial)
+    cc = np.empty(n + 1)
+    p = 1.0
+    for i in range(n):
+        cc[i] = a[i + 1] * p
+        p *= tau_lo
+    cc[n] = -rem * p
+    binom_n = 1.0
+    for i in range(n + 1):
+        # b_i = sum_{j <= i} C(i, j) / C(n, j) c_j
+        s = 0.0
+        cij = 1.0
+        cnj = 1.0
+        for j in range(i + 1):
+            s += cij / cnj * cc[j]
+            cij = cij * (i - j) / (j + 1)
+            cnj = cnj * (n - j) / (j + 1)
+        if not s > 0.0:
+            return False, 0.0, 0.0
+    # the root of p and the velocity there; the velocity's remainder must be negligible
+    tr = 0.5 * (tau_lo + tau_hi)
+    v = 0.0
+    for j in range(n, 0, -1):
+        v = v * tr + j * a[j]
+    if not v < 0.0 or (n + 1) * rem * tr ** n > 4.0 * EPS * -v:
+        return False, 0.0, 0.0
+    return True, tr, v
+
+
 # ------------------------------------------------------------ the grid search
 
 # layout of the per-run grid array: step, the homogeneous flow over one step
@@ -350,7 +466,8 @@ def _newton_root(sp, seg, s, lo, hi):
         if not (lo < s_new <= hi):
             break
         if abs(ds) <= 4.0 * EPS * (t0 + s):
-            return True, s_new, v, a, n
+            # the state at the root, to first order in the last (rounding-level) step
+            return True, s_new, v + a * ds, a, n
         s = s_new
     return False, s, 0.0, 0.0, n
 
@@ -358,6 +475,9 @@ def _newton_root(sp, seg, s, lo, hi):
 @jit
 def next_impact_grid(sp, seg, s_end, hmax, max_steps, grid, s_guess):
     """:func:`next_impact` with fewer closed-form evaluations and the same guarantee.
+
+    A hop from the wall short enough for its Taylor polynomial to fix the root to
+    rounding (chatter) is taken by :func:`short_hop`, without closed-form evaluation.
 
     The flight is advanced on a fixed grid by its exact linear recurrence (``grid``,
     from :func:`search_grid`): no transcendental function per node.  Each grid interval
@@ -371,14 +491,17 @@ def next_impact_grid(sp, seg, s_end, hmax, max_steps, grid, s_guess):
     prediction, e.g. the hop of a periodic orbit) or from the interpolant's root, and
     accepted only if the cubic lower bounds from the interval's start and, backwards,
     from the root cover the gap between them (so no earlier root).  Otherwise (grazing
-    dips, the segment's end, no grid) the search continues as :func:`search_from`, the
-    certified walk.  Rounding of the recurrence is bounded generously (32 eps of the
+    dips, the segment's end, no grid) the search is :func:`next_impact`'s certified walk.  Rounding of the recurrence is bounded generously (32 eps of the
     terms' size per step) and subtracted.  Returns as next_impact.
     """
     h = grid[GSTEP]
     g = sp[G]
     x0 = seg[X0]
     v0 = seg[V0]
+    if x0 == g and v0 > 0.0:
+        ok, s, v = short_hop(sp, seg, s_end)
+        if ok:
+            return IMPACT, s, v, 0
     if h <= 0.0 or (x0 - g <= 0.0 and v0 <= 0.0):
         return next_impact(sp, seg, s_end, hmax, max_steps)
     om, pp, qq = sp[OM], sp[PP], sp[QQ]
@@ -453,12 +576,10 @@ def next_impact_grid(sp, seg, s_end, hmax, max_steps, grid, s_guess):
                 tb = _clear_of_root(-vr, ar, m3)
                 if tb >= gap or _cubic_positive(fs - rnd, vs, as_, m3, gap - tb):
                     return IMPACT, r, vr, evals
-    # the certified walk from the last certified node
-    if s == 0.0:
-        kind, sr, vr, ns = next_impact(sp, seg, s_end, hmax, max_steps - evals)
-        return kind, sr, vr, ns + evals
-    x, v, a, j, rh, xs = flight_state(sp, seg, s)
-    return search_from(sp, seg, s, x, v, a, rh, xs, s_end, hmax, max_steps, evals + 1)
+    # the certified walk, from the start: where it is needed (grazing dips, the run's
+    # end, chatter) its steps are few, and its results are those of next_impact exactly
+    kind, sr, vr, ns = next_impact(sp, seg, s_end, hmax, max_steps - evals)
+    return kind, sr, vr, ns + evals
 
 
 @jit
@@ -516,4 +637,4 @@ def phase_of(t, om):
     return ph
 
 
-__all__ = ["safe_step", "next_impact", "next_impact_grid", "search_from", "search_grid", "impact_outcome", "phase_of", "step_caps", "step_cap", "OM"]
+__all__ = ["safe_step", "next_impact", "next_impact_grid", "search_from", "search_grid", "short_hop", "impact_outcome", "phase_of", "step_caps", "step_cap", "OM"]
