@@ -7,7 +7,7 @@
 # IMPACT_ALLOWED_ORIGINS: comma-separated host[:port] origins allowed to open the app's
 # websocket (default localhost:5006). "*" or an empty value is refused at start.
 # The process runs as uid 10001 and writes only to /var/cache/impact (its HOME, the
-# Numba cache warmed at build time, Matplotlib's config and TMPDIR), so the image also
+# Numba cache warmed at build time and TMPDIR), so the image also
 # runs with a read-only root: --read-only -v impact-cache:/var/cache/impact.
 # scripts/container_check.sh builds and checks this image with podman.
 FROM debian:bookworm-slim
@@ -21,7 +21,6 @@ ENV VIRTUAL_ENV=/opt/venv \
 ENV PATH="${VIRTUAL_ENV}/bin:${PATH}" \
     NUMBA_CACHE_DIR="${IMPACT_CACHE}/numba" \
     NUMBA_CPU_NAME=generic \
-    MPLCONFIGDIR="${IMPACT_CACHE}/matplotlib" \
     IMPACT_ALLOWED_ORIGINS=localhost:5006
 
 # Debian's own Python 3.11 (python3 3.11.2-1+b1 is bookworm's for its whole life; the
@@ -37,7 +36,7 @@ RUN groupadd --gid 10001 app \
     && useradd --no-log-init --no-create-home --uid 10001 --gid app \
         --home-dir "${IMPACT_CACHE}" --shell /usr/sbin/nologin app \
     && install -d -o app -g app -m 0750 "${IMPACT_CACHE}" "${NUMBA_CACHE_DIR}" \
-        "${MPLCONFIGDIR}" "${IMPACT_CACHE}/tmp"
+        "${IMPACT_CACHE}/tmp"
 
 # Install the project (not editable) with the versions pinned in pyproject.toml, using
 # the pip that Debian's python3-venv ships (23.0.1, which uses Debian's CA store).
