@@ -287,11 +287,32 @@ def short_hop(sp, seg, s_end):
         return False, 0.0, 0.0
     m, c, k, om = sp[M], sp[C_], sp[K], sp[OM]
     n = SHORT_HOP_ORDER
+    cph, sph = seg[CPH], seg[SPH]
+    acc = (cph - 2.0 * c * u - k * x0) / m
+    if not acc < 0.0:
+        return False, 0.0, 0.0
+    alpha, w0sq = sp[ALPHA], sp[W0SQ]
+    tau = 2.0 * u / -acc
+    if tau * max(om, 2.0 * alpha + math.sqrt(w0sq)) > 0.5:
+        # the remainder's terms (lambda tau)^(n+1) / (n+1)! exceed rounding by far
+        return False, 0.0, 0.0
+    # remainder bound: homogeneous derivatives b_j, forcing FA omega^j
+    rh = math.sqrt(seg[HV0] * seg[HV0] + w0sq * seg[H0] * seg[H0])
+    b_prev = rh
+    b = rh * (2.0 * alpha + math.sqrt(w0sq))
+    fact = 2.0
+    for j in range(3, n + 2):
+        b_prev, b = b, 2.0 * alpha * b + w0sq * b_prev
+        fact *= j
+    rem = (b + sp[FA] * om ** (n + 1)) / fact
+    # can the remainder fix the parabola's root to rounding (it moves the root by about
+    # rem tau^(n+1) / u)?
+    if not (tau < s_end and rem * tau ** (n + 1) <= 4.0 * EPS * u * (abs(seg[T0]) + tau)):
+        return False, 0.0, 0.0
     # Taylor coefficients a[j] = x^(j) / j! of f at the start (a[0] = 0)
     e = np.empty(n + 1)
     e[0] = x0
     e[1] = u
-    cph, sph = seg[CPH], seg[SPH]
     fj = 1.0
     for j in range(n - 1):
         # j-th derivative of cos(omega t): omega^j (cos, -sin, -cos, sin)[j mod 4]
@@ -303,23 +324,12 @@ def short_hop(sp, seg, s_end):
         return False, 0.0, 0.0
     a = np.empty(n + 1)
     a[0] = 0.0
-    fact = 1.0
+    fj = 1.0
     for j in range(1, n + 1):
-        fact *= j
-        a[j] = e[j] / fact
-    # remainder bound: homogeneous derivatives b_j, forcing FA omega^j
-    alpha, w0sq = sp[ALPHA], sp[W0SQ]
-    rh = math.sqrt(seg[HV0] * seg[HV0] + w0sq * seg[H0] * seg[H0])
-    b_prev = rh
-    b = rh * (2.0 * alpha + math.sqrt(w0sq))
-    for j in range(3, n + 2):
-        b_prev, b = b, 2.0 * alpha * b + w0sq * b_prev
-    rem = (b + sp[FA] * om ** (n + 1)) / (fact * (n + 1))
+        fj *= j
+        a[j] = e[j] / fj
     # tau_lo: Newton on q(tau) = (p - rem tau^(n+1)) / tau from the parabola's root
-    tau = 2.0 * u / -e[2]
     tau_lo = tau_hi = 0.0
-    if not tau < s_end:
-        return False, 0.0, 0.0
     for sign in (-1.0, 1.0):
         for _ in range(30):
             q = sign * rem
@@ -511,7 +521,7 @@ def next_impact_grid(sp, seg, s_end, hmax, max_steps, grid, s_guess):
     cph, sph = seg[CPH], seg[SPH]
     rh0 = math.sqrt(hd * hd + w0sq * hh * hh)
     m3, m4 = derivative_bounds(sp, rh0, s_end)
-    herm = m4 * h ** 4 / 384.0
+    herm = m4 * (h * h) * (h * h) / 384.0
     # size of the terms summed at a node (|h| <= rh0 / w0, |x_p| <= FA), for rounding
     size = rh0 / math.sqrt(w0sq) + rh0 + sp[FA] * (1.0 + om) + abs(g) + abs(x0)
     fs, vs = x0 - g, v0
