@@ -13,7 +13,7 @@
 # sessions and caches; give the container that many CPUs. Anything but a whole number
 # >= 1 is refused at start (0 would let Tornado take the host's core count).
 # The process runs as uid 10001 and writes only to /var/cache/impact (its HOME, the
-# Numba cache warmed at build time, Matplotlib's config and TMPDIR), so the image also
+# Numba cache warmed at build time and TMPDIR), so the image also
 # runs with a read-only root: --read-only -v impact-cache:/var/cache/impact.
 # scripts/container_check.sh builds and checks this image with podman.
 FROM debian:bookworm-slim
@@ -27,7 +27,6 @@ ENV VIRTUAL_ENV=/opt/venv \
 ENV PATH="${VIRTUAL_ENV}/bin:${PATH}" \
     NUMBA_CACHE_DIR="${IMPACT_CACHE}/numba" \
     NUMBA_CPU_NAME=generic \
-    MPLCONFIGDIR="${IMPACT_CACHE}/matplotlib" \
     IMPACT_ALLOWED_ORIGINS=localhost:5006 \
     IMPACT_PROCS=1
 
@@ -44,7 +43,7 @@ RUN groupadd --gid 10001 app \
     && useradd --no-log-init --no-create-home --uid 10001 --gid app \
         --home-dir "${IMPACT_CACHE}" --shell /usr/sbin/nologin app \
     && install -d -o app -g app -m 0750 "${IMPACT_CACHE}" "${NUMBA_CACHE_DIR}" \
-        "${MPLCONFIGDIR}" "${IMPACT_CACHE}/tmp"
+        "${IMPACT_CACHE}/tmp"
 
 # Install the project (not editable) with the versions pinned in pyproject.toml, using
 # the pip that Debian's python3-venv ships (23.0.1, which uses Debian's CA store).

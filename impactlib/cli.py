@@ -2,7 +2,19 @@
 from __future__ import annotations
 
 import argparse
+import importlib
 import sys
+
+#: what the accuracy report needs beyond the core (the extra ``report`` of pyproject.toml)
+REPORT_MODULES = ("mpmath", "matplotlib")
+
+
+def _importable(name: str) -> bool:
+    try:
+        importlib.import_module(name)
+    except ImportError:
+        return False
+    return True
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -22,8 +34,14 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv=None) -> int:
     args = build_parser().parse_args(argv)
     if args.command == "accuracy":
-        from .accuracy import main as accuracy_main
-        return accuracy_main(quick=args.quick, out=args.out)
+        missing = [m for m in REPORT_MODULES if not _importable(m)]
+        if missing:
+            print(f"python -m impactlib accuracy needs the optional extra 'report' "
+                  f"(missing: {', '.join(missing)}): pip install 'impact-explorer[report]'",
+                  file=sys.stderr)
+            return 2
+        from .report import main as report_main
+        return report_main(quick=args.quick, out=args.out)
     return 2  # pragma: no cover  (argparse rejects other commands)
 
 

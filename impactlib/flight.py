@@ -36,34 +36,57 @@ T0, CPH, SPH, FC, FS, H0, HV0, X0, V0, NSEG = range(10)
 RESONANCE_RTOL = 16 * 2.220446049250313e-16
 
 
-def system_constants(m, c, k, g, r, omega):
-    """Pack the constants of Eq. (1) used by every kernel (Python side, once per run)."""
-    return system_constants_rows(*(np.array([v], dtype=np.float64) for v in (m, c, k, g, r, omega)))[0]
-
-
-def system_constants_rows(m, c, k, g, r, omega):
-    """system_constants for arrays of parameters: one row of ``sp`` per entry."""
-    n = m.shape[0]
-    sp = np.zeros((n, NSP))
-    sp[:, M], sp[:, C_], sp[:, K], sp[:, G], sp[:, R], sp[:, OM] = m, c, k, g, r, omega
+@jit
+def fill_constants(sp, m, c, k, g, r, omega):
+    """Write the constants of Eq. (1) used by every kernel into the row ``sp`` (length NSP)."""
+    sp[M], sp[C_], sp[K], sp[G], sp[R], sp[OM] = m, c, k, g, r, omega
     alpha = c / m
     w0sq = k / m
     q = (k * m - c * c) / (m * m)
-    sp[:, ALPHA], sp[:, W0SQ], sp[:, Q_] = alpha, w0sq, q
-    b = np.sqrt(np.abs(q))
-    sp[:, SQ] = b
-    over = q < 0
-    with np.errstate(divide="ignore", invalid="ignore"):
-        sp[:, LAM1] = np.where(over, -w0sq / (alpha + b), 0.0)
-        sp[:, LAM2] = np.where(over, -(alpha + b), 0.0)
-        detune = k - m * omega * omega
-        res = (c == 0.0) & (np.abs(detune) <= RESONANCE_RTOL * np.maximum(k, m * omega * omega))
+    b = math.sqrt(abs(q))
+    sp[ALPHA], sp[W0SQ], sp[Q_], sp[SQ] = alpha, w0sq, q, b
+    if q < 0.0:
+        sp[LAM1] = -w0sq / (alpha + b)
+        sp[LAM2] = -(alpha + b)
+    else:
+        sp[LAM1] = 0.0
+        sp[LAM2] = 0.0
+    detune = k - m * omega * omega
+    res = c == 0.0 and abs(detune) <= RESONANCE_RTOL * max(k, m * omega * omega)
+    if res:
+        sp[RES], sp[PP], sp[QQ] = 1.0, 0.0, 0.0
+        sp[FA] = 1.0 / (2.0 * m * omega)
+    else:
         d = detune * detune + (2.0 * c * omega) ** 2
-        sp[:, RES] = res
-        sp[:, PP] = np.where(res, 0.0, detune / d)
-        sp[:, QQ] = np.where(res, 0.0, 2.0 * c * omega / d)
-    sp[:, FA] = np.where(res, 1.0 / (2.0 * m * omega), np.hypot(sp[:, PP], sp[:, QQ]))
+        sp[RES], sp[PP], sp[QQ] = 0.0, detune / d, 2.0 * c * omega / d
+        sp[FA] = math.hypot(sp[PP], sp[QQ])
+
+
+@jit
+def system_constants(m, c, k, g, r, omega):
+    """The constants ``sp`` of Eq. (1) used by every kernel, for one set of parameters."""
+    sp = np.empty(NSP)
+    fill_constants(sp, m, c, k, g, r, omega)
     return sp
+
+
+@jit
+def system_constants_rows(m, c, k, g, r, omega):
+    """system_constants for arrays of parameters: one row of ``sp`` per entry."""
+    n = m.shape[0]
+    sp = np.empty((n, NSP))
+    for i in range(n):
+        fill_constants(sp[i], m[i], c[i], k[i], g[i], r[i], omega[i])
+    return sp
+
+
+@jit
+def fastest_rate(sp):
+    """Fastest rate of the linear flow and the forcing, 1/s (as impactlib.model.fastest_rate)."""
+    a = sp[C_] / sp[M]
+    w0sq = sp[K] / sp[M]
+    lam = a + math.sqrt(abs(a * a - w0sq)) if a * a > w0sq else math.sqrt(w0sq)
+    return max(max(lam, sp[OM]), sp[C_] / sp[M])
 
 
 @jit

@@ -146,11 +146,21 @@ class RunLimits:
     max_samples: int = 5_000_000     # Poincare + dense samples held in memory
 
 
+#: RK4 is stable for |h lambda| <= 2.785 on the negative real axis and 2.828 on the
+#: imaginary axis; the smaller bound, rounded down, is used for every direction.
+RK4_STABLE_H_LAMBDA = 2.78
+
+
+def rk4_stability_limits(m, c, k):
+    """Largest stable RK4 step for the linear flow (arrays or scalars), inf if it has no rate."""
+    lam = flow_rate(m, c, k)
+    with np.errstate(divide="ignore"):
+        return np.where(lam == 0, np.inf, RK4_STABLE_H_LAMBDA / lam)
+
+
 def rk4_stability_limit(p: Params) -> float:
-    """Largest stable RK4 step for the linear flow: |h lambda| <= 2.78 on the real axis,
-    2.83 on the imaginary axis; 2.78 is used for every direction (conservative)."""
-    lam = float(flow_rate(p.m, p.c, p.k))
-    return math.inf if lam == 0 else 2.78 / lam
+    """Largest stable RK4 step for the linear flow of ``p`` (see :func:`rk4_stability_limits`)."""
+    return float(rk4_stability_limits(p.m, p.c, p.k))
 
 
 def check_run(p: Params, *, t_end, t_record, x0, v0, phase, method, dt, rtol, atol,
@@ -162,7 +172,8 @@ def check_run(p: Params, *, t_end, t_record, x0, v0, phase, method, dt, rtol, at
     if method not in METHODS:
         problems.append(f"method={method!r} is unknown; expected one of {', '.join(METHODS)}")
     t_end = _as_float("t_end", t_end, problems)
-    t_record = _as_float("t_record", t_record, problems)
+    # t_record defaults to half the run (the paper's 250 of 500); nan if t_end is bad
+    t_record = 0.5 * t_end if t_record is None else _as_float("t_record", t_record, problems)
     x0 = max(0.0, p.g) if x0 is None else _as_float("x0", x0, problems)
     v0 = _as_float("v0", v0, problems)
     phase = _as_float("phase", phase, problems)
@@ -187,7 +198,7 @@ def check_run(p: Params, *, t_end, t_record, x0, v0, phase, method, dt, rtol, at
                     problems.append(f"dt={dt!r} must be > 0")
                 elif dt > lim:
                     problems.append(f"dt={dt!r} exceeds the RK4 stability limit {lim:.4g} for these "
-                                    f"parameters (fastest rate {2.78 / lim:.4g} 1/s)")
+                                    f"parameters (fastest rate {RK4_STABLE_H_LAMBDA / lim:.4g} 1/s)")
     if method == "rk45":
         rtol = _as_float("rtol", rtol, problems)
         atol = _as_float("atol", atol, problems)

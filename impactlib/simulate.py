@@ -8,13 +8,16 @@ from dataclasses import dataclass
 import numpy as np
 
 from ._jit import jit
-from .events import FLY, IMPACT, NO_IMPACT, STEP_LIMIT, STICK, impact_outcome, next_impact
-from .flight import G, R, RES, flight_state, release_time, start_segment, system_constants, wall_force
+from .events import (FLY, HMAX_PERIODS, IMPACT, NGRID, NO_IMPACT, STEP_LIMIT, STICK,
+                     impact_outcome, next_impact, next_impact_grid, search_grid, step_cap)
+from .flight import (G, R, T0, fastest_rate, flight_state, release_time, start_segment,
+                     system_constants)
 from .integrators import advance_rk4, advance_rk45
 from .model import Params, RunLimits, check_run
 
 METHOD_IDS = {"exact": 0, "rk4": 1, "rk45": 2}
-HMAX_PERIODS = 0.5        # longest certified step, in forcing periods (1/4 at resonance)
+HOP_MEMORY = 8           # hops remembered for predicting the next one
+HOP_MATCH_RTOL = 1e-3    # ... if it left the wall this close in speed
 TAIL_TOL = 1e-6          # a chatter is summed once one hop lasts under this many time scales
 
 # run status codes (Solution.status)
@@ -30,7 +33,7 @@ MESSAGES = {
 @jit
 def _sample_segment(sp, seg, t_hi, ts, xs, vs, i):
     while i < ts.shape[0] and ts[i] <= t_hi:
-        x, v, a, j, rh, sc = flight_state(sp, seg, ts[i] - seg[0])
+        x, v, a, j, rh, sc = flight_state(sp, seg, ts[i] - seg[T0])
         xs[i] = x
         vs[i] = v
         i += 1
@@ -68,9 +71,15 @@ def run_kernel(sp, method, t, x, v, t_end, t_record, hmax, rate, dt, rtol, atol,
     nsteps = 0
     ip = 0
     idn = 0
-    status = 0
+    status = OK
     stuck = False
     h45 = min(0.01 / rate, hmax)
+    grid = search_grid(sp, rate) if method == 0 else np.zeros(NGRID)
+    # the last hops (rebound speed, length): a hop that left the wall as fast as this one
+    # predicts its length (periodic orbits repeat them)
+    hop_v = np.full(HOP_MEMORY, -1.0)
+    hop_s = np.zeros(HOP_MEMORY)
+    n_hop = 0
     # the initial state may be on the wall
     if x <= g:
         x = g
@@ -112,7 +121,18 @@ def run_kernel(sp, method, t, x, v, t_end, t_record, hmax, rate, dt, rtol, atol,
         started_at_rest = False
         if method == 0:
             seg = start_segment(sp, t, x, v)
-            kind, s, vh, ns = next_impact(sp, seg, t_end - t, hmax, max_steps - nsteps)
+            guess = -1.0
+            best = HOP_MATCH_RTOL * v
+            for jh in range(HOP_MEMORY):
+                if abs(hop_v[jh] - v) < best:
+                    best = abs(hop_v[jh] - v)
+                    guess = hop_s[jh]
+            kind, s, vh, ns = next_impact_grid(sp, seg, t_end - t, hmax, max_steps - nsteps,
+                                               grid, guess)
+            if kind == IMPACT and v > 0.0:
+                hop_v[n_hop % HOP_MEMORY] = v
+                hop_s[n_hop % HOP_MEMORY] = s
+                n_hop += 1
             th = t + s
             ip = _sample_segment(sp, seg, th, pc_t, pc_x, pc_v, ip)
             idn = _sample_segment(sp, seg, th, d_t, d_x, d_v, idn)
@@ -134,7 +154,7 @@ def run_kernel(sp, method, t, x, v, t_end, t_record, hmax, rate, dt, rtol, atol,
             # reached t_end, or stopped at the step limit: (th, xh, vend) is where
             t, x, v = th, xh, vend
             if kind == STEP_LIMIT:
-                status = 2
+                status = STEP_LIMIT_HIT
             break
         # impact at th with velocity vh <= 0
         t = th
@@ -161,13 +181,13 @@ def run_kernel(sp, method, t, x, v, t_end, t_record, hmax, rate, dt, rtol, atol,
         else:
             v = vplus
         if n_tot >= max_impacts:
-            status = 1
+            status = IMPACT_LIMIT
             break
         if nsteps >= max_steps:
-            status = 2
+            status = STEP_LIMIT_HIT
             break
-    if status == 0 and n_rec > cap:
-        status = 3
+    if status == OK and n_rec > cap:
+        status = OUTPUT_FULL
     return status, n_rec, n_tot, n_stick, n_tail, t, x, v, stuck, nsteps
 
 
@@ -177,11 +197,19 @@ def run_kernel(sp, method, t, x, v, t_end, t_record, hmax, rate, dt, rtol, atol,
 @dataclass(frozen=True)
 class Impacts:
     t: np.ndarray
-    phase: np.ndarray
+    phase: np.ndarray      # t mod T
     v: np.ndarray          # velocity just before impact, <= 0
 
     def __len__(self):
         return self.t.shape[0]
+
+    def __getattr__(self, name):
+        # simulate() leaves phase to be computed on first use, from t and the period
+        d = self.__dict__
+        if name == "phase" and "_period" in d:
+            d["phase"] = np.mod(d["t"], d["_period"])
+            return d["phase"]
+        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
 
 
 @dataclass(frozen=True)
@@ -220,24 +248,54 @@ class Solution:
         return self.status == OK
 
 
-def section_times(t_record, t_end, phase, period):
-    """Times phase + n T inside [t_record, t_end]."""
-    n0 = math.ceil((t_record - phase) / period - 1e-12)
-    n1 = math.floor((t_end - phase) / period + 1e-12)
-    ts = phase + period * np.arange(n0, n1 + 1, dtype=np.float64)
-    return ts[(ts >= t_record - 1e-9 * period) & (ts <= t_end + 1e-9 * period)]
+@jit
+def section_times(t_lo, t_hi, phase, period):
+    """Poincare section times phase + n T inside [t_lo, t_hi] (a period's 1e-9 of slack
+    at the ends, so a section on an end is kept despite rounding)."""
+    n0 = math.ceil((t_lo - phase) / period - 1e-12)
+    n1 = math.floor((t_hi - phase) / period + 1e-12)
+    out = np.empty(max(0, n1 - n0 + 1))
+    n = 0
+    for i in range(out.shape[0]):
+        t = phase + period * (n0 + i)
+        if t_lo - 1e-9 * period <= t <= t_hi + 1e-9 * period:
+            out[n] = t
+            n += 1
+    return out[:n]
+
+
+@jit
+def _run_constants(m, c, k, g, r, omega):
+    sp = system_constants(m, c, k, g, r, omega)
+    return sp, fastest_rate(sp), step_cap(sp)
+
+
+@jit
+def _run_setup(m, c, k, g, r, omega, t_lo, t_hi, phase):
+    # one kernel call for the constants and the section times of a run
+    sp, rate, hmax = _run_constants(m, c, k, g, r, omega)
+    return sp, rate, hmax, section_times(t_lo, t_hi, phase, 2.0 * math.pi / omega)
 
 
 def run_constants(p: Params):
     """(sp, rate, hmax) of one run; sweeps.py builds the same for many rows at once."""
-    sp = system_constants(p.m, p.c, p.k, p.g, p.r, p.omega)
-    rate = p.rate()
-    hmax = (0.25 if sp[RES] else HMAX_PERIODS) * p.T
-    return sp, rate, hmax
+    return _run_constants(p.m, p.c, p.k, p.g, p.r, p.omega)
+
+
+_NO_SAMPLES = np.empty(0)
+
+
+def _built(cls, **fields):
+    """An instance of the frozen dataclass ``cls`` from fields known to be complete and
+    valid: one dict update instead of a frozen __init__'s setattr per field (a few µs of
+    a simulate() call that takes tens)."""
+    obj = object.__new__(cls)
+    obj.__dict__.update(fields)
+    return obj
 
 
 def simulate(p: Params, t_end: float = 500.0, x0: float | None = None, v0: float = 0.0,
-             t_record: float = 250.0, phase: float = 0.0, method: str = "exact", *,
+             t_record: float | None = None, phase: float = 0.0, method: str = "exact", *,
              dense: int = 0, dt: float | None = None, rtol: float = 1e-6, atol: float = 1e-9,
              t0: float = 0.0, max_impacts: int | None = None, max_steps: int | None = None,
              limits: RunLimits = RunLimits()) -> Solution:
@@ -247,7 +305,8 @@ def simulate(p: Params, t_end: float = 500.0, x0: float | None = None, v0: float
     ----------
     p : Params
     t_end, t_record : float
-        End of the run and start of the record window (the paper: 500 and 250).
+        End of the run and start of the record window; t_record defaults to t_end / 2
+        (the paper: 500 and 250).
     x0, v0 : float
         Initial state; x0 defaults to max(0, g).
     phase : float
@@ -269,19 +328,22 @@ def simulate(p: Params, t_end: float = 500.0, x0: float | None = None, v0: float
         rtol=rtol, atol=atol, dense=dense, limits=limits)
     max_impacts = limits.max_impacts if max_impacts is None else int(max_impacts)
     max_steps = limits.max_steps if max_steps is None else int(max_steps)
-    sp, rate, hmax = run_constants(p)
-    pc_t = section_times(t_record, t_end, phase, p.T)
-    d_t = np.linspace(t_record, t_end, dense) if dense else np.empty(0)
-    n_periods = int((t_end - t_record) / p.T) + 2
+    sp, rate, hmax, pc_t = _run_setup(p.m, p.c, p.k, p.g, p.r, p.omega, t_record, t_end, phase)
+    period = 2.0 * math.pi / p.omega
+    d_t = np.linspace(t_record, t_end, dense) if dense else _NO_SAMPLES
+    n_pc, n_d = pc_t.shape[0], d_t.shape[0]
+    n_periods = int((t_end - t_record) / period) + 2
     cap = min(max(1024, 8 * n_periods), max_impacts)
     while True:
-        imp_t = np.empty(cap)
-        imp_v = np.empty(cap)
-        stick = np.empty((n_periods + 2, 2))
-        pc_x = np.full(pc_t.shape, np.nan)
-        pc_v = np.full(pc_t.shape, np.nan)
-        d_x = np.full(d_t.shape, np.nan)
-        d_v = np.full(d_t.shape, np.nan)
+        # one buffer for all outputs: impacts (t, v), sticking intervals, samples (x, v)
+        buf = np.empty(2 * cap + 2 * (n_periods + 2) + 2 * (n_pc + n_d))
+        imp_t, imp_v = buf[:cap], buf[cap:2 * cap]
+        o = 2 * cap + 2 * (n_periods + 2)
+        stick = buf[2 * cap:o].reshape(n_periods + 2, 2)
+        samples = buf[o:]
+        samples[:] = np.nan
+        pc_x, pc_v = samples[:n_pc], samples[n_pc:2 * n_pc]
+        d_x, d_v = samples[2 * n_pc:2 * n_pc + n_d], samples[2 * n_pc + n_d:]
         tic = time.perf_counter()
         status, n_rec, n_tot, n_stick, n_tail, tf, xf, vf, stuck, nsteps = run_kernel(
             sp, METHOD_IDS[method], float(t0), x0, v0, t_end, t_record, hmax, rate,
@@ -294,21 +356,23 @@ def simulate(p: Params, t_end: float = 500.0, x0: float | None = None, v0: float
             cap = min(max_impacts, max(2 * cap, n_rec))
             continue
         break
+    # the outputs are views of the one buffer (its size is bounded by the window)
     n_keep = min(n_rec, cap)
-    it = imp_t[:n_keep].copy()
-    impacts = Impacts(it, np.mod(it, p.T), imp_v[:n_keep].copy())
-    keep_pc = ~np.isnan(pc_x)
-    poincare = Samples(pc_t[keep_pc], pc_x[keep_pc], pc_v[keep_pc])
+    it = imp_t[:n_keep]
+    impacts = _built(Impacts, t=it, v=imp_v[:n_keep], _period=period)
+    # samples are filled in time order: the kept ones are a prefix (a run stopped by a
+    # work limit, or a section time a rounding past t_end, leaves the rest unfilled)
+    k = n_pc - int(np.count_nonzero(np.isnan(pc_x)))
+    poincare = _built(Samples, t=pc_t[:k], x=pc_x[:k], v=pc_v[:k])
     dense_out = None
     if dense:
-        keep_d = ~np.isnan(d_x)
-        dense_out = Samples(d_t[keep_d], d_x[keep_d], d_v[keep_d])
+        k = n_d - int(np.count_nonzero(np.isnan(d_x)))
+        dense_out = _built(Samples, t=d_t[:k], x=d_x[:k], v=d_v[:k])
     message = MESSAGES[status]
-    if status in (IMPACT_LIMIT, STEP_LIMIT_HIT):
+    if status == IMPACT_LIMIT or status == STEP_LIMIT_HIT:
         message += f" (stopped at t = {tf:.6g})"
-    return Solution(params=p, method=method, t_end=t_end, t_record=t_record, phase=phase,
-                    impacts=impacts, poincare=poincare, sticking=stick[:n_stick].copy(),
-                    dense=dense_out, status=status, message=message,
-                    final=(tf, xf, vf, bool(stuck)), n_impacts=n_tot, n_chatter=n_tail,
-                    nsteps=nsteps,
-                    elapsed=elapsed)
+    return _built(Solution, params=p, method=method, t_end=t_end, t_record=t_record, phase=phase,
+                  impacts=impacts, poincare=poincare, sticking=stick[:n_stick],
+                  dense=dense_out, status=status, message=message,
+                  final=(tf, xf, vf, bool(stuck)), n_impacts=n_tot, n_chatter=n_tail,
+                  nsteps=nsteps, elapsed=elapsed)

@@ -2,9 +2,10 @@
 
 Each value is an independent run (or, with ``warm_start``, starts from the previous
 value's final state at the matching forcing phase).  Runs keep only what the caller
-needs: impacts inside the record window, and for regime maps the (m, n) class.  The
-work is split into chunks run by a shared thread pool on ``nogil`` kernels, so every core
-works and several callers (app sessions) share the cores instead of oversubscribing them.
+needs: impacts inside the record window, and for regime maps the (m, n) class.  Every
+sweep of independent starts goes through :func:`run_jobs`: a shared thread pool runs
+``nogil`` kernels on blocks of jobs handed out dynamically, so every core works to the
+end and several callers (app sessions) share the cores instead of oversubscribing them.
 """
 from __future__ import annotations
 
@@ -19,10 +20,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from ._jit import jit
-from .flight import RES, system_constants_rows
 from .classify import MAX_PERIOD, PERIOD_RTOL, Motion, classify, describe, motion_class
-from .model import PARAM_NAMES, Params, RunLimits, check_run, fastest_rate, flow_rate
-from .simulate import HMAX_PERIODS, METHOD_IDS, run_kernel, simulate
+from .events import step_caps
+from .flight import G, OM, system_constants_rows
+from .model import PARAM_NAMES, Params, RunLimits, check_run, fastest_rate, rk4_stability_limits
+from .simulate import METHOD_IDS, run_kernel, section_times, simulate
 
 CAP_PER_VALUE = 4096        # impacts kept per value; more are counted, flagged in status
 _POOL_LOCK = threading.Lock()
@@ -56,25 +58,28 @@ class _Inline:
 
 
 def _executor(workers):
+    """The pool for tasks that are whole jobs of their own (the Lyapunov strip's chunks,
+    basin blocks, a regime map's classify pass); inline for ``workers=1``."""
     return _Inline() if workers == 1 else _pool()
-
-
-@jit
-def _section_times(t_lo, t_hi, period):
-    n0 = math.ceil(t_lo / period - 1e-12)
-    n1 = math.floor(t_hi / period + 1e-12)
-    n = max(0, n1 - n0 + 1)
-    out = np.empty(n)
-    for i in range(n):
-        out[i] = (n0 + i) * period
-    return out
 
 
 @jit
 def sweep_kernel(sps, method, x0s, v0, t_end, t_record, hmaxs, rates, dt, rtol, atol,
                  out_t, out_v, counts, status, finals, classes, classify, warm,
                  max_impacts, max_steps):
-    """Run each row of sps in turn from x0s[i] (see run_kernel); results into the out arrays.
+    """Run each row of sps in turn from (x0s[i], v0) (see run_kernel); results into the
+    out arrays.  :func:`rows_kernel` with one start velocity for all rows."""
+    rows_kernel(sps, method, x0s, np.full(sps.shape[0], v0), t_end, t_record, hmaxs, rates,
+                dt, rtol, atol, out_t, out_v, counts, status, finals, classes, classify, warm,
+                max_impacts, max_steps)
+
+
+@jit
+def rows_kernel(sps, method, x0s, v0s, t_end, t_record, hmaxs, rates, dt, rtol, atol,
+                out_t, out_v, counts, status, finals, classes, classify, warm,
+                max_impacts, max_steps):
+    """Run each row of sps in turn from (x0s[i], v0s[i]) (see run_kernel); results into
+    the out arrays.
 
     classes[i] = (m, n) codes when classify; finals[i] = (t, x, v, stuck) at the end.
     With warm, value i starts from value i-1's final state, at the time t0 in [0, T_i)
@@ -83,21 +88,22 @@ def sweep_kernel(sps, method, x0s, v0, t_end, t_record, hmaxs, rates, dt, rtol, 
     nvals = sps.shape[0]
     empty = np.empty(0)
     stick = np.empty((0, 2))
-    x, v, t0 = x0s[0], v0, 0.0
+    x, v, t0 = x0s[0], v0s[0], 0.0
     for i in range(nvals):
         sp = sps[i]
-        om = sp[5]
+        om = sp[OM]
         period = 2.0 * math.pi / om
         if not warm:
             x = x0s[i]
+            v = v0s[i]
         elif i > 0:
             x = finals[i - 1, 1]
             v = finals[i - 1, 2]
-            ph = sps[i - 1, 5] * finals[i - 1, 0]
+            ph = sps[i - 1, OM] * finals[i - 1, 0]
             ph = ph - 2.0 * math.pi * math.floor(ph / (2.0 * math.pi))
             t0 = ph / om
         if classify:
-            pc_t = _section_times(t0 + t_record, t0 + t_end, period)
+            pc_t = section_times(t0 + t_record, t0 + t_end, 0.0, period)
         else:
             pc_t = empty
         pc_x = np.full(pc_t.shape[0], np.nan)
@@ -238,21 +244,22 @@ def _param_rows(p, columns, method, dt, x0):
     if x0 is not None and x0 < full["g"].max():
         problems.append(f"x0={x0!r} is behind the endstop g={full['g'].max()!r}")
     if method == "rk4" and not problems:
-        lam = flow_rate(full["m"], full["c"], full["k"])
-        worst = int(np.argmax(lam))
-        if dt * lam[worst] > 2.78:
-            problems.append(f"dt={dt!r} exceeds the RK4 stability limit {2.78 / lam[worst]:.4g} at "
+        lims = rk4_stability_limits(full["m"], full["c"], full["k"])
+        worst = int(np.argmin(lims))
+        if dt > lims[worst]:
+            problems.append(f"dt={dt!r} exceeds the RK4 stability limit {lims[worst]:.4g} at "
                             + ", ".join(f"{k}={v[worst]!r}" for k, v in columns.items()))
     if problems:
         raise ValueError("invalid sweep values: " + "; ".join(dict.fromkeys(problems)))
     sps = system_constants_rows(*(np.ascontiguousarray(full[f]) for f in PARAM_NAMES))
     rates = fastest_rate(full["m"], full["c"], full["k"], full["omega"])
-    hmaxs = np.where(sps[:, RES] != 0.0, 0.25, HMAX_PERIODS) * 2.0 * math.pi / full["omega"]
+    hmaxs = step_caps(sps)
     return sps, hmaxs, rates
 
 
 def _run_rows(sps, hmaxs, rates, method, x0s, v0, t_end, t_record, dt, rtol, atol, classify,
               warm, cap, max_impacts, max_steps):
+    """rows_kernel on fresh output arrays; v0 is one start velocity or one per row."""
     n = sps.shape[0]
     out_t = np.empty((n, cap))
     out_v = np.empty((n, cap))
@@ -260,15 +267,83 @@ def _run_rows(sps, hmaxs, rates, method, x0s, v0, t_end, t_record, dt, rtol, ato
     status = np.zeros(n, dtype=np.int64)
     finals = np.zeros((n, 4))
     classes = np.zeros((n, 2), dtype=np.int64)
-    sweep_kernel(sps, METHOD_IDS[method], np.ascontiguousarray(x0s, dtype=np.float64), v0, t_end, t_record, hmaxs, rates,
-                 0.0 if dt is None else dt, rtol, atol, out_t, out_v, counts, status, finals,
-                 classes, classify, warm, max_impacts, max_steps)
+    v0s = np.ascontiguousarray(np.broadcast_to(np.asarray(v0, dtype=np.float64), (n,)))
+    rows_kernel(sps, METHOD_IDS[method], np.ascontiguousarray(x0s, dtype=np.float64), v0s,
+                t_end, t_record, hmaxs, rates, 0.0 if dt is None else dt, rtol, atol, out_t,
+                out_v, counts, status, finals, classes, classify, warm, max_impacts, max_steps)
     return out_t, out_v, counts, status, finals, classes
 
 
-def _split(n, parts):
-    edges = np.linspace(0, n, parts + 1).round().astype(int)
-    return [(a, b) for a, b in zip(edges[:-1], edges[1:]) if b > a]
+#: output held by one block of jobs (impacts kept x jobs): bounds a block's size
+BLOCK_OUTPUT = 1 << 18
+#: jobs are taken in strides of this many, so neighbouring (similarly costly) values
+#: spread over the blocks
+INTERLEAVE = 16
+
+
+def interleaved(n: int, stride: int = INTERLEAVE) -> np.ndarray:
+    """0, s, 2s, ..., 1, 1 + s, ...: an order of n jobs in which every stretch samples
+    the whole range."""
+    return np.concatenate([np.arange(j, n, stride) for j in range(min(stride, n))])
+
+
+def run_jobs(sps, hmaxs, rates, x0s, v0s, *, method, t_end, t_record, dt, rtol, atol,
+             classify, cap, max_impacts, max_steps, on_block, workers=None, cancel=None,
+             order=None) -> int:
+    """Run N independent jobs on the shared thread pool: balanced, streaming, cancellable.
+
+    Job i is one run (see :func:`rows_kernel`) of the system constants ``sps[i]`` (with
+    ``hmaxs[i]``, ``rates[i]`` from :func:`_param_rows`) from x = x0s[i], v = v0s[i] at
+    t = 0; the other settings are shared.  This is the entry for any sweep of independent
+    starts (diagrams, regime maps, basin grids).
+
+    Balanced: ``workers`` threads (default: the pool's size) each take the next block of
+    jobs, in ``order`` (default :func:`interleaved`), from a shared counter; blocks
+    shrink as the jobs run out (guided self-scheduling: a quarter of the remaining jobs
+    per worker, at most BLOCK_OUTPUT / cap jobs so a block's output stays small), so no
+    thread idles while another holds a costly stretch.
+    Streaming: ``on_block(idx, out_t, out_v, counts, status, finals, classes)`` is called
+    in the worker's thread as each block ends, ``idx`` the block's job indices and the
+    arrays the block's results (as :func:`_run_rows`; out_t holds each job's recorded
+    impacts, ``cap`` at most).
+    Cancellable: once ``cancel`` (a threading.Event) is set, no block is handed out;
+    blocks under way finish.
+
+    Returns the number of jobs run.  With ``workers=1`` the jobs run in the caller's thread.
+    """
+    n = sps.shape[0]
+    order = interleaved(n) if order is None else np.asarray(order)
+    workers = worker_count() if workers is None else max(1, int(workers))
+    max_block = max(1, BLOCK_OUTPUT // max(1, cap))
+    lock = threading.Lock()
+    state = {"next": 0, "done": 0}
+
+    def take():
+        with lock:
+            a = state["next"]
+            if a >= n or (cancel is not None and cancel.is_set()):
+                return None
+            b = min(n, a + max(1, min(max_block, (n - a) // (4 * workers))))
+            state["next"] = b
+            return order[a:b]
+
+    def drain():
+        ran = 0
+        while True:
+            idx = take()
+            if idx is None:
+                return ran
+            res = _run_rows(sps[idx], hmaxs[idx], rates[idx], method=method, x0s=x0s[idx],
+                            v0=v0s[idx], t_end=t_end, t_record=t_record, dt=dt, rtol=rtol,
+                            atol=atol, classify=classify, warm=False, cap=cap,
+                            max_impacts=max_impacts, max_steps=max_steps)
+            on_block(idx, *res)
+            ran += idx.size
+
+    if workers == 1 or n <= 1:
+        return drain()
+    futs = [_pool().submit(drain) for _ in range(min(workers, n))]
+    return sum(f.result() for f in futs)
 
 
 def _rows(values, order, T_of, out_t, out_v, counts, direction):
@@ -330,38 +405,47 @@ def bifurcation(p: Params, name: str, values, t_end: float = 500.0, t_record: fl
     if warm_start not in (False, True, "up", "down", "both"):
         raise ValueError(f"warm_start={warm_start!r} must be False, 'up', 'down' or 'both'")
     tic = time.perf_counter()
-    ex = _executor(workers)
     n = values.size
     sps, hmaxs, rates = _param_rows(p, {name: values}, method, dt, x0)
-    T_of = 2 * math.pi / sps[:, 5]
+    T_of = 2 * math.pi / sps[:, OM]
     if x0 is not None:
         x0s = np.full(n, x0c)
     elif name == "g":
         x0s = np.maximum(0.0, values)
     else:
         x0s = np.full(n, max(0.0, p.g))
-    common = dict(method=method, v0=v0, t_end=t_end, t_record=t_record, dt=dt, rtol=rtol,
+    common = dict(method=method, t_end=t_end, t_record=t_record, dt=dt, rtol=rtol,
                   atol=atol, classify=False, cap=cap_per_value, max_impacts=max_impacts,
                   max_steps=max_steps)
-    jobs = []
+    parts = []
     if warm_start:
         srt = np.argsort(values, kind="stable")
+        jobs = []
         for d in {"up": [1], True: [1], "down": [-1], "both": [1, -1]}[warm_start]:
             order = srt if d > 0 else srt[::-1]
-            jobs.append((d, order, ex.submit(_run_rows, sps[order], hmaxs[order], rates[order],
-                                             x0s=x0s[order], warm=True, **common)))
+            run = (lambda order=order: _run_rows(sps[order], hmaxs[order], rates[order],
+                                                 x0s=x0s[order], v0=v0, warm=True, **common))
+            jobs.append((d, order, _pool().submit(run) if workers != 1 else _Done(run())))
+        for d, order, fut in jobs:
+            out_t, out_v, counts, st, _, _ = fut.result()
+            parts.append((order, st, counts, _rows(values, order, T_of, out_t, out_v, counts, d)))
     else:
-        # interleaved chunks spread the costly values (chatter) evenly over the threads
-        nchunks = min(n, max(4 * (workers or worker_count()), int(math.ceil(n / 128))))
-        for j in range(nchunks):
-            order = np.arange(j, n, nchunks)
-            jobs.append((0, order, ex.submit(_run_rows, sps[order], hmaxs[order], rates[order],
-                                             x0s=x0s[order], warm=False, **common)))
-    parts = []
-    for d, order, fut in jobs:
-        out_t, out_v, counts, st, _, _ = fut.result()
-        parts.append((order, st, counts, _rows(values, order, T_of, out_t, out_v, counts, d)))
+        def collect(idx, out_t, out_v, counts, st, finals, classes):
+            parts.append((idx, st, counts, _rows(values, idx, T_of, out_t, out_v, counts, 0)))
+
+        run_jobs(sps, hmaxs, rates, x0s, np.full(n, v0), on_block=collect, workers=workers,
+                 **common)
     return merge_parts(name, values, parts, time.perf_counter() - tic)
+
+
+class _Done:
+    """A finished job with the interface of a Future."""
+
+    def __init__(self, value):
+        self._value = value
+
+    def result(self):
+        return self._value
 
 
 def merge_parts(name, values, parts, elapsed) -> Bifurcation:
@@ -402,7 +486,11 @@ def regime_map(p: Params, name_x: str, values_x, name_y: str, values_y,
                rows_per_task: int = 4, max_impacts: int = 1_000_000,
                max_steps: int = 20_000_000) -> RegimeMap:
     """The (m, n) class on a grid of two parameters, e.g. (omega, r): a picture of where
-    the paper's Fig. 3 panels sit.  Memory: one task's impacts at a time per worker."""
+    the paper's Fig. 3 panels sit.
+
+    Every cell is one job of :func:`run_jobs` (cells handed out to the workers in small
+    blocks; ``rows_per_task`` is accepted for compatibility and not used).  Memory: one
+    block's impacts at a time per worker."""
     t_end, t_record, x0c, v0, _, dt, rtol, atol = _check_sweep(
         p, [name_x, name_y], t_end, t_record, x0, v0, method, dt, rtol, atol)
     if name_x == name_y:
@@ -410,27 +498,23 @@ def regime_map(p: Params, name_x: str, values_x, name_y: str, values_y,
     vx = _values_array(name_x, values_x)
     vy = _values_array(name_y, values_y)
     tic = time.perf_counter()
-    x_start = x0c
-    impacts = np.zeros((vy.size, vx.size), dtype=np.int64)
+    nx, ny = vx.size, vy.size
+    # every cell is one job: (iy, ix) -> iy * nx + ix
+    sps, hmaxs, rates = _param_rows(p, {name_x: np.tile(vx, ny), name_y: np.repeat(vy, nx)},
+                                    method, dt, x0)
+    # each cell starts at x0, or at rest on its own wall (max(0, g))
+    x0s = np.full(nx * ny, x0c) if x0 is not None else np.maximum(0.0, sps[:, G])
+    impacts = np.zeros(ny * nx, dtype=np.int64)
     period = np.zeros_like(impacts)
     status = np.zeros_like(impacts)
 
-    def task(iy0, iy1):
-        for iy in range(iy0, iy1):
-            sps, hmaxs, rates = _param_rows(p, {name_x: vx, name_y: np.full(vx.size, vy[iy])},
-                                            method, dt, x0)
-            # each cell starts at x0, or at rest on its own wall (max(0, g))
-            x0s = np.full(vx.size, x_start) if x0 is not None else np.maximum(0.0, sps[:, 3])
-            _, _, _, st, _, cls = _run_rows(
-                sps, hmaxs, rates, method=method, x0s=x0s, v0=v0, t_end=t_end,
-                t_record=t_record, dt=dt, rtol=rtol, atol=atol, classify=True, warm=False,
-                cap=512, max_impacts=max_impacts, max_steps=max_steps)
-            impacts[iy], period[iy], status[iy] = cls[:, 0], cls[:, 1], st
+    def collect(idx, out_t, out_v, counts, st, finals, classes):
+        impacts[idx], period[idx], status[idx] = classes[:, 0], classes[:, 1], st
 
-    ex = _executor(workers)
-    futs = [ex.submit(task, a, b) for a, b in _split(vy.size, max(1, vy.size // rows_per_task))]
-    for f in futs:
-        f.result()
+    run_jobs(sps, hmaxs, rates, x0s, np.full(nx * ny, v0), method=method, t_end=t_end,
+             t_record=t_record, dt=dt, rtol=rtol, atol=atol, classify=True, cap=512,
+             max_impacts=max_impacts, max_steps=max_steps, on_block=collect, workers=workers)
+    impacts, period, status = (a.reshape(ny, nx) for a in (impacts, period, status))
     motions = judge_aperiodic(p, name_x, vx, name_y, vy, impacts, period, workers,
                               t_end=t_end, t_record=t_record, method=method, x0=x0, v0=v0,
                               dt=dt, rtol=rtol, atol=atol, max_impacts=max_impacts,

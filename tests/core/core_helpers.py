@@ -1,7 +1,7 @@
 """Shared helpers of the core tests (imported as a plain module: pytest puts this folder on sys.path).
 
 References are expensive (mpmath); they are cached for the whole session by the
-``functools.lru_cache`` wrappers in :mod:`impactlib.accuracy` and :func:`mp_cached` below.
+``functools.lru_cache`` wrappers in :mod:`impactlib.report` and :func:`mp_cached` below.
 """
 from __future__ import annotations
 

@@ -5,7 +5,8 @@ import sys
 import numpy as np
 
 from impactlib import cli
-from impactlib.accuracy import CASES, match_impacts
+from impactlib.compare import match_impacts
+from impactlib.report import CASES
 
 
 def test_match_counts_missed_extra_and_tail():
@@ -28,8 +29,8 @@ def test_cases_cover_the_issue():
 
 def test_accuracy_command_quick(tmp_path):
     lines = []
-    from impactlib import accuracy
-    assert accuracy.main(quick=True, out=tmp_path, echo=lines.append) == 0
+    from impactlib import report
+    assert report.main(quick=True, out=tmp_path, echo=lines.append) == 0
     text = "\n".join(lines)
     assert "exact" in text and "rk4 dt=0.01" in text and "rk45 rtol=1e-06" in text
     md = (tmp_path / "BENCHMARKS-accuracy.md").read_text()
@@ -45,3 +46,15 @@ def test_cli_wiring():
     out = subprocess.run([sys.executable, "-m", "impactlib", "accuracy", "--help"],
                          capture_output=True, text=True, check=True, timeout=120)
     assert "--quick" in out.stdout and "--out" in out.stdout
+
+
+def test_accuracy_command_names_the_missing_extra():
+    """Without mpmath (the report's reference) the command says which extra to install,
+    and the core and the metrics the app uses still import."""
+    code = ("import sys; sys.modules['mpmath'] = None; "
+            "import impactlib, impactlib.compare; from impactlib.cli import main; "
+            "sys.exit(main(['accuracy', '--quick', '--out', 'unused']))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         timeout=120)
+    assert out.returncode == 2, out.stderr
+    assert "impact-explorer[report]" in out.stderr and "mpmath" in out.stderr

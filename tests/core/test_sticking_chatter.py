@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import impactlib as il
-from impactlib.accuracy import steady_orbit
+from impactlib.report import steady_orbit
 from impactlib.reference import mp_release_time
 
 from core_helpers import EPS, PAPER, mp_cached

@@ -89,3 +89,16 @@ def test_bad_sweep_values():
         il.bifurcation(PAPER, "omega", [1.0, -1.0], t_end=10.0, t_record=0.0)
     with pytest.raises(ValueError, match="r=1.5 must lie in"):
         il.bifurcation(PAPER, "r", [0.5, 1.5], t_end=10.0, t_record=0.0)
+
+
+def test_t_record_defaults_to_half_of_t_end():
+    """The paper's window (250 of 500) is the default, and a shorter run keeps its second
+    half instead of failing on a t_record beyond t_end."""
+    assert il.simulate(PAPER).t_record == 250.0
+    short = il.simulate(PAPER, t_end=100.0)
+    assert short.t_record == 50.0
+    explicit = il.simulate(PAPER, t_end=100.0, t_record=50.0)
+    np.testing.assert_array_equal(short.impacts.t, explicit.impacts.t)
+    assert short.impacts.t.size > 0 and short.impacts.t.min() >= 50.0
+    with pytest.raises(ValueError, match="t_end"):
+        il.simulate(PAPER, t_end=-1.0)
