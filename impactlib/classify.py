@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ._jit import jit
+from .events import HMAX_PERIODS_RESONANCE
 from .lyapunov import grows_without_bound, lyapunov_from, no_dissipation
 from .model import RunLimits
 
@@ -156,8 +157,11 @@ def classify(sol, rtol: float = PERIOD_RTOL, max_period: int = MAX_PERIOD) -> Mo
                       "unbounded (no dissipation): the impact speed grows every cycle")
     tf, xf, vf, stuck = sol.final
     window = sol.t_end - sol.t_record
-    # at most about the work of the solution itself
-    budget = RunLimits(max_impacts=2 * sol.n_impacts + 1000, max_steps=2 * sol.nsteps + 10000)
+    # at most about the work of the solution itself; the tangent run takes the certified
+    # walk, whose steps are capped at a quarter period, so allow that many too
+    walk = 2 * math.ceil(window / (HMAX_PERIODS_RESONANCE * p.T)) + 8 * sol.n_impacts
+    budget = RunLimits(max_impacts=2 * sol.n_impacts + 1000,
+                       max_steps=2 * sol.nsteps + walk + 10000)
     ly = lyapunov_from(p, tf, xf, vf, tf + window, tf, limits=budget)
     lam, err = float(ly.exponents[0]), float(ly.error[0])
     coarse = ""

@@ -45,11 +45,13 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from ._jit import jit
-from .events import IMPACT, STEP_LIMIT, STICK, impact_outcome, next_impact
+from .events import IMPACT, STEP_LIMIT, STICK, impact_outcome, next_impact_grid, search_grid
 from .flight import (ALPHA, C_, G, K, LAM1, LAM2, M, OM, Q_, R, SQ, W0SQ, flight_state,
                      release_time, start_segment)
-from .simulate import TAIL_TOL
+from .simulate import HOP_MATCH_RTOL, HOP_MEMORY, TAIL_TOL
 
 # tangent_run status codes (as simulate.run_kernel)
 RUN_OK, RUN_IMPACT_LIMIT, RUN_STEP_LIMIT = 0, 1, 2
@@ -159,6 +161,12 @@ def tangent_run(sp, t, x, v, t_end, t_record, hmax, rate, marks, qr, imp_t, imp_
     vmin = math.inf
     j11, j12, j21, j22 = 1.0, 0.0, 0.0, 1.0
     tq = t            # time the tangent has reached
+    # the impact search of run_kernel, hop prediction included, so that the run (and
+    # the diagram rows of a Lyapunov sweep) are the same to the last bit
+    grid = search_grid(sp, rate)
+    hop_v = np.full(HOP_MEMORY, -1.0)
+    hop_s = np.zeros(HOP_MEMORY)
+    n_hop = 0
     im = 0            # next mark
     if nm == 0:
         t_mark0 = -math.inf
@@ -210,7 +218,18 @@ def tangent_run(sp, t, x, v, t_end, t_record, hmax, rate, marks, qr, imp_t, imp_
         if t >= t_end:
             break
         seg = start_segment(sp, t, x, v)
-        kind, s, vh, ns = next_impact(sp, seg, t_end - t, hmax, max_steps - nsteps)
+        guess = -1.0
+        best = HOP_MATCH_RTOL * v
+        for jh in range(HOP_MEMORY):
+            if abs(hop_v[jh] - v) < best:
+                best = abs(hop_v[jh] - v)
+                guess = hop_s[jh]
+        kind, s, vh, ns = next_impact_grid(sp, seg, t_end - t, hmax, max_steps - nsteps,
+                                           grid, guess)
+        if kind == IMPACT and v > 0.0:
+            hop_v[n_hop % HOP_MEMORY] = v
+            hop_s[n_hop % HOP_MEMORY] = s
+            n_hop += 1
         th = t + s
         started_at_rest = s == 0.0 and x <= g and v == 0.0
         nsteps += ns

@@ -36,12 +36,17 @@ def test_undamped_elastic_resonance_is_unbounded():
     assert m.kind == "unbounded" and m.label.startswith("unbounded (no dissipation)")
 
 
-def test_omega_1000_short_window_is_undetermined_long_window_chaotic():
+def test_omega_1000_chaos_is_measured_not_assumed():
     p = PAPER.replace(omega=1000.0)
     m = il.classify(il.simulate(p))
-    assert m.kind == "undetermined" and "lengthen the window" in m.label
     long = il.classify(il.simulate(p, t_end=5000.0, t_record=500.0))
     assert long.kind == "chaotic" and long.lyapunov > 2 * long.lyapunov_error
+    # the default 250 s window holds ~115 impacts: its estimate may or may not clear twice
+    # its error; either it says so, or its exponent agrees with the long window's
+    if m.kind == "chaotic":
+        assert abs(m.lyapunov - long.lyapunov) < 3 * (m.lyapunov_error + long.lyapunov_error)
+    else:
+        assert m.kind == "undetermined" and "lengthen the window" in m.label
     # two nearby exact runs separate at the same rate
     assert long.lyapunov == pytest.approx(benettin(p, 5000.0, 9500.0, 1.0), abs=0.02)
 

@@ -57,8 +57,9 @@ def test_chaotic_exponent_positive_and_matches_benettin():
     ly = il.lyapunov(p, t_end=5000.0, t_record=500.0)
     assert ly.exponents[0] > 10 * ly.error[0] > 0
     ref = benettin(p, 500.0, 5000.0)
-    # two estimates of one number over the same window: agree within their spread
-    assert ly.exponents[0] == pytest.approx(ref, abs=0.01)
+    # two estimates of one number over the same window, along trajectories that part in
+    # the chaos: each spreads by about ly.error, their difference by sqrt(2) times that
+    assert ly.exponents[0] == pytest.approx(ref, abs=3 * math.sqrt(2) * ly.error[0])
 
 
 def test_sticking_gives_minus_infinity():
