@@ -157,8 +157,8 @@ def classify(sol, rtol: float = PERIOD_RTOL, max_period: int = MAX_PERIOD) -> Mo
                       "unbounded (no dissipation): the impact speed grows every cycle")
     tf, xf, vf, stuck = sol.final
     window = sol.t_end - sol.t_record
-    # at most about the work of the solution itself; the tangent run takes the certified
-    # walk, whose steps are capped at a quarter period, so allow that many too
+    # at most about the work of the solution itself, plus the certified walk's steps (at
+    # most a quarter period each) that the search falls back to near grazing
     walk = 2 * math.ceil(window / (HMAX_PERIODS_RESONANCE * p.T)) + 8 * sol.n_impacts
     budget = RunLimits(max_impacts=2 * sol.n_impacts + 1000,
                        max_steps=2 * sol.nsteps + walk + 10000)
