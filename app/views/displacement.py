@@ -5,12 +5,15 @@ from bokeh.models import ColumnDataSource, Range1d, Span
 
 from ..compute import SceneData
 from ._figure import IMPACT, LINE, WALL, make_figure
+from .base import View
 
 #: The x axis opens on the last few periods; reset/zoom out shows the whole window.
 PERIODS_SHOWN = 8
 
 
-class DisplacementView:
+class DisplacementView(View):
+    key = "displacement"
+
     def __init__(self):
         self.source = ColumnDataSource({"t": [], "x": []})
         self.impacts = ColumnDataSource({"t": [], "x": []})
@@ -25,7 +28,7 @@ class DisplacementView:
         self.figure.scatter("t", "x", source=self.impacts, size=4, color=IMPACT,
                             name="displacement_impacts")
 
-    def update(self, scene: SceneData) -> None:
+    def show_scene(self, scene: SceneData) -> None:
         g = scene.run.params.g
         tr = scene.trajectory
         self.source.data = {"t": tr["t"], "x": tr["x"]}
