@@ -26,6 +26,7 @@ from .panel_fixes import release_links
 from .scenes import BY_KEY
 from .settings import QUERY_NAMES, Settings
 from .views import VIEWS
+from .views._figure import share_helpers
 
 log = logging.getLogger(__name__)
 
@@ -51,6 +52,7 @@ class Explorer(pn.viewable.Viewer):
         self.views = [cls() for cls in VIEWS]
         for view in self.views:
             setattr(self, view.key, view)
+        share_helpers([v.figure for v in self.views])
         self.downloads = Downloads(self)
         self.controls = c = Controls(self.settings, self.views, on_scene=self.load_scene,
                                      on_accuracy=self._on_accuracy, downloads=self.downloads)
