@@ -69,10 +69,10 @@ def share_helpers(figures) -> None:
             if type(axis.formatter) is BasicTickFormatter:
                 axis.formatter = formatter
             axis.major_label_policy = labels
-        for grid in fig.xgrid + fig.ygrid:
-            if type(grid.ticker) is BasicTicker:
+        for grid in fig.center:         # (fig.xgrid and fig.select walk the whole graph)
+            if type(getattr(grid, "ticker", None)) is BasicTicker:
                 grid.ticker = ticker
-        for r in fig.select(type=GlyphRenderer):
+        for r in (r for r in fig.renderers if isinstance(r, GlyphRenderer)):
             r.nonselection_glyph = None
             r.muted_glyph = None
             r.data_source.selection_policy = policy
