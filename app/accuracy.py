@@ -20,7 +20,8 @@ import impactlib as il
 from impactlib.compare import V_FLOOR, match_impacts
 
 from . import compute
-from .state import METHODS, Run
+from .settings import METHODS, method_options, method_text
+from .state import Run
 
 HORIZON = 40.0       # s of motion compared, from tau = 0
 REPEATS = 3          # run time: median of this many runs of the whole scene
@@ -41,24 +42,17 @@ class MethodResult:
 
 
 def _kwargs(run: Run, method: str, t_end: float) -> dict:
-    kw = dict(t_end=t_end, t_record=0.0, x0=run.x0, v0=run.v0, method=method,
-              limits=il.RunLimits(max_impacts=compute.SCENE_MAX_IMPACTS,
-                                  max_steps=compute.SCENE_MAX_STEPS[method],
-                                  max_samples=compute.SCENE_MAX_SAMPLES))
-    if method == "rk4":
-        kw["dt"] = run.dt
-    elif method == "rk45":
-        kw.update(rtol=run.rtol, atol=run.atol)
-    return kw
+    return dict(t_end=t_end, t_record=0.0, x0=run.x0, v0=run.v0, method=method,
+                limits=compute.scene_limits(method), **method_options(run, method))
 
 
 def _timed(run: Run, method: str) -> tuple[float, str]:
     kw = _kwargs(run, method, run.t_end)
-    sol = compute.run_simulate(run.params, **kw)          # warm-up
+    sol = il.simulate(run.params, **kw)          # warm-up
     times: list[float] = []
     while len(times) < REPEATS and sum(times) < TIME_BUDGET:
         tic = time.perf_counter()
-        sol = compute.run_simulate(run.params, **kw)
+        sol = il.simulate(run.params, **kw)
         times.append(time.perf_counter() - tic)
     return float(np.median(times)), ("" if sol.status == 0 else str(sol.message))
 
@@ -66,18 +60,16 @@ def _timed(run: Run, method: str) -> tuple[float, str]:
 def compare_methods(run: Run) -> list[MethodResult]:
     """Each method against the exact one over [0, HORIZON], and its scene run time."""
     horizon = min(run.t_end, HORIZON)
-    ref = compute.run_simulate(run.params, **_kwargs(run, "exact", horizon))
+    ref = il.simulate(run.params, **_kwargs(run, "exact", horizon))
     ref_t, ref_v = np.asarray(ref.impacts.t), np.asarray(ref.impacts.v)
     scale = float(np.max(np.abs(ref_v))) if ref_v.size else 0.0
-    settings = {"exact": "closed form", "rk4": f"dt = {run.dt:g}",
-                "rk45": f"rtol = {run.rtol:g}, atol = {run.atol:g}"}
     out = []
     for method in METHODS:
         try:
-            sol = compute.run_simulate(run.params, **_kwargs(run, method, horizon))
+            sol = il.simulate(run.params, **_kwargs(run, method, horizon))
             seconds, note = _timed(run, method)
         except ValueError as exc:           # e.g. rk4 beyond its stability limit
-            out.append(MethodResult(method, settings[method], np.nan, 0, 0, 0, np.nan,
+            out.append(MethodResult(method, method_text(run, method), np.nan, 0, 0, 0, np.nan,
                                     np.nan, str(exc)))
             continue
         t, v = np.asarray(sol.impacts.t), np.asarray(sol.impacts.v)
@@ -88,7 +80,7 @@ def compare_methods(run: Run) -> list[MethodResult]:
             dv_rel = float(np.max(np.abs(v[j] - ref_v[i]))) / scale
         else:
             dt_max = dv_rel = np.nan
-        out.append(MethodResult(method, settings[method], seconds, len(pairs), missed,
+        out.append(MethodResult(method, method_text(run, method), seconds, len(pairs), missed,
                                 extra, dt_max, dv_rel, note))
     return out
 

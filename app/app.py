@@ -7,9 +7,8 @@ import panel as pn
 # `panel serve` puts this file's folder first on sys.path, where `import app` would find
 # this very file; the `app` package is the folder itself, one level up.
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+from app import serving  # noqa: E402
 from app.explorer import Explorer  # noqa: E402
-from app.serving import (  # noqa: E402
-    deliver_stranded_writes, quiet_closed_sockets, quiet_rejected_values)
 
 
 def create_app() -> Explorer:
@@ -17,9 +16,7 @@ def create_app() -> Explorer:
     # a dropped websocket reconnects to the same server session (kept for
     # --unused-session-lifetime): settings and views survive a Wi-Fi hiccup
     pn.extension(notifications=False, reconnect=True)
-    quiet_closed_sockets()
-    quiet_rejected_values()
-    deliver_stranded_writes()
+    serving.install()
     return Explorer(args=pn.state.session_args)
 
 

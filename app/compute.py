@@ -6,7 +6,6 @@ the run options, bounded (LRU). Everything here is plain numpy; no widgets.
 from __future__ import annotations
 
 import dataclasses
-import inspect
 
 import numpy as np
 import panel as pn
@@ -25,37 +24,27 @@ MAX_MAP_POINTS = 20_000
 #: partial results and a message on the badge. Measured worst costs on this 2-core
 #: machine: ~1.5 us per exact step (heavily damped), ~9 us per impact, ~0.05 us per rk4
 #: step, so each simulation stays under ~0.4 s. The paper's scenes need <= 11k exact
-#: steps and <= 2.3k impacts over 500 s. Wall time is passed only if the core has it.
-SCENE_WALL_TIME = 0.5
+#: steps and <= 2.3k impacts over 500 s.
 SCENE_MAX_IMPACTS = 25_000
 SCENE_MAX_STEPS = {"exact": 250_000, "rk4": 5_000_000, "rk45": 1_000_000}
 SCENE_MAX_SAMPLES = 250_000
 
 _HASH = {il.Params: lambda p: repr(p).encode()}
-_SIMULATE_ARGS = frozenset(inspect.signature(il.simulate).parameters)
 
 
-def run_simulate(params: il.Params, **kw) -> il.Solution:
-    """``il.simulate``, passing ``wall_time`` only if the core accepts it."""
-    if "wall_time" not in _SIMULATE_ARGS:
-        kw.pop("wall_time", None)
-    return il.simulate(params, **kw)
+def scene_limits(method: str) -> il.RunLimits:
+    """Work ceilings of one scene simulation with ``method``."""
+    return il.RunLimits(max_impacts=SCENE_MAX_IMPACTS, max_steps=SCENE_MAX_STEPS[method],
+                        max_samples=SCENE_MAX_SAMPLES)
 
 
 @pn.cache(max_items=32, policy="LRU", hash_funcs=_HASH)
 def simulate(key: tuple, dense: int, phase: float) -> il.Solution:
-    """``il.simulate`` for ``Run.scene_key()``; cached across sessions."""
-    params, t_end, t_record, x0, v0, method, dt, rtol, atol = key
-    kw = dict(t_end=t_end, t_record=t_record, x0=x0, v0=v0, method=method, dense=dense,
-              phase=phase, wall_time=SCENE_WALL_TIME,
-              limits=il.RunLimits(max_impacts=SCENE_MAX_IMPACTS,
-                                  max_steps=SCENE_MAX_STEPS[method],
-                                  max_samples=SCENE_MAX_SAMPLES))
-    if method == "rk4":
-        kw["dt"] = dt
-    elif method == "rk45":
-        kw.update(rtol=rtol, atol=atol)
-    return run_simulate(params, **kw)
+    """``il.simulate`` for ``Run.scene_key()`` (Params, then (keyword, value) pairs);
+    cached across sessions."""
+    params, options = key[0], dict(key[1:])
+    return il.simulate(params, dense=dense, phase=phase,
+                       limits=scene_limits(options["method"]), **options)
 
 
 def scene_solution(run: Run) -> il.Solution:
@@ -129,3 +118,18 @@ def section_columns(run: Run) -> dict:
     ps = sol.poincare
     return {"t": last(ps.t, MAX_MAP_POINTS), "x": last(ps.x, MAX_MAP_POINTS),
             "v": last(ps.v, MAX_MAP_POINTS)}
+
+
+def scene_and_section(run: Run, shown) -> tuple | ValueError:
+    """(scene, section) of ``run``, reusing what did not change since ``shown()`` (the
+    run, scene and section on screen); a ValueError if the core refuses the settings."""
+    prev, old_scene, section = shown()
+    scene = old_scene
+    try:
+        if prev is None or run.scene_key() != prev.scene_key():
+            scene = build_scene(run)
+        if prev is None or scene is not old_scene or run.psi != prev.psi:
+            section = section_columns(run)
+    except ValueError as exc:
+        return exc
+    return scene, section

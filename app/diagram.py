@@ -1,20 +1,26 @@
-"""The live bifurcation diagram: computed off the event loop, streamed, cancellable.
+"""The live bifurcation diagram: computed once per set of inputs, shared, streamed.
 
-One worker thread per server process runs diagram chunks for every session in FIFO
-order (each chunk uses all cores through the core's parallel sweep). A session's
-diagram is split into chunks of interleaved omega values, so the whole range fills in
-coarse-to-fine and the first points appear at once; chunk sizes adapt to the measured
-cost so that slow parameter sets still stream and cancel within a fraction of a second.
-Each chunk is a separate job, so sessions take turns and nobody waits for a whole
-diagram of someone else. Restarting bumps a generation number: queued chunks of the
-old generation are dropped before they run, and results that arrive late are ignored.
-The core's kernels release the GIL, so the server's event loop keeps serving.
+A diagram depends only on ``Run.diagram_key()``. ``CACHE`` holds one ``SharedDiagram``
+per key, in flight or finished: a session that asks for a diagram someone else is
+computing follows that computation (the chunks so far arrive at once, the rest as they
+come); one that asks for a finished diagram gets it at once. The computation stops
+when the last session following it leaves. Finished diagrams are kept up to a memory
+bound (least recently used dropped first); one cut short by the time limit is not kept.
+
+One worker thread per server process runs the chunks of every computation in FIFO
+order (each chunk uses all cores through the core's parallel sweep). A diagram is split
+into chunks of interleaved omega values, so the whole range fills in coarse-to-fine and
+the first points appear at once; chunk sizes adapt to the measured cost so that slow
+parameter sets still stream and stop within a fraction of a second. Each chunk is a
+separate task, so computations take turns. The core's kernels release the GIL, so the
+server's event loop keeps serving meanwhile.
 """
 from __future__ import annotations
 
 import logging
 import threading
 import time
+from collections import OrderedDict
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 
@@ -43,6 +49,10 @@ MAX_CHUNK = 64
 DRAW_RESOLUTION = 1e-3
 #: At most this many impacts per omega value are kept (the first ones of the window).
 MAX_IMPACTS_PER_VALUE = 100
+#: Finished diagrams kept for later sessions: at most this many bytes of chunk arrays
+#: (the default diagram holds ~0.5 MB) and this many diagrams.
+CACHE_BYTES = 64 * 2**20
+CACHE_ITEMS = 128
 
 _POOL = ThreadPoolExecutor(max_workers=1, thread_name_prefix="impact-diagram")
 
@@ -91,97 +101,186 @@ def compute_chunk(run: Run, values: np.ndarray) -> dict:
             "partial": int(np.count_nonzero((status != 0) & (status != 3)))}
 
 
-class DiagramRunner:
-    """Runs one session's diagram. ``dispatch(fn)`` must run ``fn`` on the session's
-    event loop (``doc.add_next_tick_callback``); callbacks get the generation number so
-    the view can ignore stale results."""
+def merged(parts: list[dict]) -> dict:
+    """Several chunks as one (``drawn`` indices shifted to the joined arrays)."""
+    out = {c: np.concatenate([p[c] for p in parts]) for c in ("omega", "v", "t", "phase")}
+    offsets = np.cumsum([0] + [p["omega"].size for p in parts[:-1]])
+    out["drawn"] = np.concatenate([p["drawn"] + o for p, o in zip(parts, offsets)])
+    return out
 
-    def __init__(self, dispatch: Callable[[Callable[[], None]], None],
-                 on_chunk: Callable[[int, dict, int, int], None],
-                 on_done: Callable[[int, dict], None],
-                 on_error: Callable[[int, str], None]):
-        self._dispatch = dispatch
-        self._on_chunk = on_chunk
-        self._on_done = on_done
-        self._on_error = on_error
-        self._lock = threading.Lock()
-        self._gen = 0
-        self.done = threading.Event()
-        self.done.set()
+
+def status_text(run: Run, info: dict, recorded: int, drawn: int) -> tuple[str, str]:
+    """(status line, figure title end) of a finished diagram of ``run``."""
+    note = f", {info['partial']} ω values stopped at a work limit" if info["partial"] else ""
+    if info["done"] < info["total"]:
+        return (f"stopped at the time limit ({DIAGRAM_WALL_TIME:g} s): {info['done']} of "
+                f"{info['total']} ω values, spread over the range{note}",
+                "partial (time limit)")
+    return (f"complete: {run.bif_n} ω values, {recorded} impacts recorded, {drawn} distinct "
+            f"points drawn, in {info['elapsed']:.2f} s{note}", "complete")
+
+
+class SharedDiagram:
+    """One diagram computation, followed by every session that shows it.
+
+    A follower is ``(ticket, on_chunk, on_done, on_error)``: ``on_chunk(part, done,
+    total)``, ``on_done(info)`` and ``on_error(text)`` are sent through the ticket (so
+    they run on that session's event loop, and not at all once it moved on).
+    """
+
+    def __init__(self, run: Run):
+        self.run, self.key = run, run.diagram_key()
+        self.order = interleaved(omega_values(run))
+        self.parts: list[dict] = []
+        self.computed = self.partial = 0
+        self.info: dict | None = None        # set when finished
+        self.error: str | None = None
+        self.abandoned = False               # every follower left before the end
+        self.nbytes = 0
+        self._followers: list[tuple] = []
+        self._lock = threading.RLock()
+        self._t0 = time.perf_counter()
 
     @property
-    def generation(self) -> int:
-        return self._gen
+    def finished(self) -> bool:
+        return self.info is not None or self.error is not None
 
-    def cancel(self) -> None:
+    def follow(self, ticket, on_chunk, on_done, on_error) -> None:
+        """Send what is there to this follower at once, and the rest as it comes.
+        Called with the cache's lock held (see ``DiagramCache.follow``)."""
+        follower = (ticket, on_chunk, on_done, on_error)
+        with self._lock:          # sends keep their order: replay, then new chunks
+            self.abandoned = False
+            if self.parts:
+                ticket.send(on_chunk, merged(self.parts), self.computed, self.order.size)
+            if self.finished:
+                self._end(follower)
+                return
+            self._followers.append(follower)
+        ticket.on_cancel(lambda: self._leave(follower))
+
+    def _leave(self, follower) -> None:
         with self._lock:
-            self._gen += 1
-        self.done.set()
+            if follower in self._followers:
+                self._followers.remove(follower)
+            if not self._followers and not self.finished:
+                self.abandoned = True          # the next chunk task stops here
 
-    def start(self, run: Run) -> int:
-        """Cancel any running diagram and start one for ``run``; returns its generation."""
-        with self._lock:
-            self._gen += 1
-            gen = self._gen
-        self.done.clear()
-        job = _Job(gen, run, interleaved(omega_values(run)), time.perf_counter())
-        self._submit(job)
-        return gen
+    def _end(self, follower) -> None:
+        ticket, _, on_done, on_error = follower
+        if self.error is not None:
+            ticket.send(on_error, self.error)
+        else:
+            ticket.send(on_done, dict(self.info))
+        ticket.finish()
 
-    def _current(self, gen: int) -> bool:
-        return gen == self._gen
+    def start(self) -> None:
+        _submit(self._step)
 
-    def _submit(self, job: "_Job") -> None:
-        try:
-            _POOL.submit(self._work, job)
-        except RuntimeError:      # interpreter shutting down
-            pass
-
-    def _work(self, job: "_Job") -> None:
-        if not self._current(job.gen):
+    def _step(self) -> None:
+        if self.abandoned and CACHE.drop_abandoned(self):
             return
-        n = job.order.size
-        if job.done == 0:
+        n = self.order.size
+        if self.computed == 0:
             size = min(FIRST_CHUNK, n)
         else:
-            rate = job.done / max(time.perf_counter() - job.t0, 1e-6)
+            rate = self.computed / max(time.perf_counter() - self._t0, 1e-6)
             size = int(min(max(1, rate * CHUNK_SECONDS), max(1, n // 4), MAX_CHUNK))
-        values = job.order[job.done: job.done + size]
+        values = self.order[self.computed: self.computed + size]
         try:
-            part = compute_chunk(job.run, np.sort(values))
+            part = compute_chunk(self.run, np.sort(values))
         except Exception as exc:   # report, never kill the worker, no traceback in the log
             log.warning("bifurcation diagram failed: %s: %s", type(exc).__name__, exc)
-            self._send(job.gen, lambda: self._on_error(job.gen, f"{type(exc).__name__}: {exc}"))
-            self.done.set()
-            return
-        if not self._current(job.gen):
-            return
-        job.partial += part.pop("partial")
-        job.done += values.size
-        done, elapsed = job.done, time.perf_counter() - job.t0
-        self._send(job.gen, lambda: self._on_chunk(job.gen, part, done, n))
-        if done >= n or elapsed > DIAGRAM_WALL_TIME:
-            info = {"elapsed": elapsed, "partial": job.partial, "done": done, "total": n}
-            self._send(job.gen, lambda: self._on_done(job.gen, info))
-            self.done.set()
+            part, error = None, f"{type(exc).__name__}: {exc}"
+        with self._lock:
+            if part is None:
+                self.error = error
+            else:
+                self.partial += part.pop("partial")
+                self.computed += values.size
+                self.parts.append(part)
+                self.nbytes += sum(a.nbytes for a in part.values())
+                elapsed = time.perf_counter() - self._t0
+                for ticket, on_chunk, _, _ in self._followers:
+                    ticket.send(on_chunk, part, self.computed, n)
+                if self.computed >= n or elapsed > DIAGRAM_WALL_TIME:
+                    self.info = {"elapsed": elapsed, "partial": self.partial,
+                                 "done": self.computed, "total": n}
+            if self.finished:
+                followers, self._followers = self._followers, []
+                for f in followers:
+                    self._end(f)
+        if self.finished:
+            CACHE.finished(self)
         else:
-            self._submit(job)
-
-    def _send(self, gen: int, fn: Callable[[], None]) -> None:
-        def guarded():
-            if self._current(gen):
-                fn()
-        try:
-            self._dispatch(guarded)
-        except Exception as exc:   # the session went away
-            log.info("diagram result dropped: %s", exc)
-            self.cancel()
+            _submit(self._step)
 
 
-class _Job:
-    """One diagram in progress (touched by one worker at a time)."""
+class DiagramCache:
+    """Shared diagrams by key: in flight (never evicted) and finished (bounded, LRU)."""
 
-    def __init__(self, gen: int, run: Run, order: np.ndarray, t0: float):
-        self.gen, self.run, self.order, self.t0 = gen, run, order, t0
-        self.done = 0
-        self.partial = 0
+    def __init__(self, max_bytes: int = CACHE_BYTES, max_items: int = CACHE_ITEMS):
+        self.max_bytes, self.max_items = max_bytes, max_items
+        self._items: OrderedDict[tuple, SharedDiagram] = OrderedDict()
+        self._lock = threading.Lock()
+
+    def follow(self, run: Run, ticket, on_chunk, on_done, on_error) -> SharedDiagram:
+        """Follow the diagram of ``run``: cached, in flight, or started now."""
+        key = run.diagram_key()
+        with self._lock:
+            shared = self._items.get(key)
+            start = shared is None
+            if start:
+                shared = self._items[key] = SharedDiagram(run)
+            self._items.move_to_end(key)
+            shared.follow(ticket, on_chunk, on_done, on_error)
+        if start:
+            shared.start()
+        return shared
+
+    def drop_abandoned(self, shared: SharedDiagram) -> bool:
+        """Forget a computation nobody follows any more (False: someone came back)."""
+        with self._lock, shared._lock:
+            if not shared.abandoned:
+                return False
+            if self._items.get(shared.key) is shared:
+                del self._items[shared.key]
+            return True
+
+    def finished(self, shared: SharedDiagram) -> None:
+        """Keep a complete diagram within the bounds; drop one that is not complete."""
+        with self._lock:
+            if self._items.get(shared.key) is not shared:
+                return
+            if shared.error or shared.info["done"] < shared.info["total"]:
+                del self._items[shared.key]
+            done = [k for k, s in self._items.items() if s.finished]
+            size = sum(self._items[k].nbytes for k in done)
+            while done and (size > self.max_bytes or len(done) > self.max_items):
+                size -= self._items.pop(done.pop(0)).nbytes
+
+    def clear(self) -> None:
+        with self._lock:
+            self._items.clear()
+
+    def __len__(self) -> int:
+        return len(self._items)
+
+    def __contains__(self, key) -> bool:
+        return key in self._items
+
+
+CACHE = DiagramCache()
+
+
+def _submit(fn: Callable[[], None]) -> None:
+    try:
+        _POOL.submit(fn)
+    except RuntimeError:      # interpreter shutting down
+        pass
+
+
+def follow(run: Run, ticket, on_chunk, on_done, on_error) -> SharedDiagram:
+    """Show the diagram of ``run`` through ``ticket`` (the work of a session's diagram
+    job): from the cache, by following a computation under way, or by starting one."""
+    return CACHE.follow(run, ticket, on_chunk, on_done, on_error)

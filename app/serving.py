@@ -1,4 +1,4 @@
-"""Server-process details that are not part of any session."""
+"""Server-process details that are not part of any session: log hygiene."""
 from __future__ import annotations
 
 import asyncio
@@ -6,6 +6,8 @@ import logging
 
 from tornado.iostream import StreamClosedError
 from tornado.websocket import WebSocketClosedError
+
+from .panel_fixes import deliver_stranded_writes
 
 log = logging.getLogger(__name__)
 
@@ -80,32 +82,8 @@ def quiet_rejected_values() -> None:
     pn.config.exception_handler = _one_line_exception
 
 
-def deliver_stranded_writes() -> None:
-    """Work around a race in Panel 1.9.4 that leaves a scene update unsent under load.
-
-    Panel writes held model changes itself (``panel.io.document``): when the websocket
-    is busy it queues the message in ``_WRITE_MSGS[doc]``, sets ``_WRITE_BLOCK[doc]``
-    and retries in a ``_dispatch_msgs`` task. A task that finishes writing deletes the
-    block without looking at the queue; a retry task that then finds no block returns,
-    so a message queued meanwhile stays there until the session's next change. The user
-    moved a slider and nothing happens. Seen under load (24 sessions): 2 of 52 slider
-    moves in Chromium and 10 of ~1000 in client sessions never updated; with this
-    wrapper none (tests/reliability/test_load.py). The wrapper sends whatever is left.
-    Idempotent, per process.
-    """
-    from panel.io import document as pdoc
-
-    if getattr(pdoc._dispatch_msgs, "_impact_explorer", False):
-        return
-    original = pdoc._dispatch_msgs
-
-    async def dispatch_msgs(doc):
-        if doc not in pdoc._WRITE_BLOCK and pdoc._WRITE_MSGS.get(doc):
-            pdoc._WRITE_BLOCK[doc] = True          # a stranded message: send it now
-        await original(doc)                         # its retries call this wrapper
-        if doc not in pdoc._WRITE_BLOCK and pdoc._WRITE_MSGS.get(doc):
-            pdoc._WRITE_BLOCK[doc] = True
-            pdoc._dispatch_write_task(doc, dispatch_msgs, doc)
-
-    dispatch_msgs._impact_explorer = True
-    pdoc._dispatch_msgs = dispatch_msgs
+def install() -> None:
+    """Everything a served process needs once: quiet logs and the Panel workarounds."""
+    quiet_closed_sockets()
+    quiet_rejected_values()
+    deliver_stranded_writes()

@@ -23,19 +23,26 @@ MAGNITUDE_MIN = 1e-50      # smallest m and omega
 
 @dataclass(frozen=True)
 class Field:
+    """A parameter's name, meaning and valid range (``lo``/``hi``: None for unbounded;
+    ``lo_open``: the lower bound itself is excluded)."""
+
     symbol: str
     label: str
     unit: str
     doc: str
+    lo: float | None = None
+    hi: float | None = None
+    lo_open: bool = False
 
 
 FIELDS = {
-    "m": Field("m", "mass", "", "mass of the oscillator (> 0)"),
-    "c": Field("c", "damping", "", "damping coefficient; the equation carries 2c, so c = sqrt(k m) is critical (>= 0)"),
-    "k": Field("k", "stiffness", "", "spring stiffness (>= 0)"),
+    "m": Field("m", "mass", "", "mass of the oscillator (> 0)", lo=0.0, lo_open=True),
+    "c": Field("c", "damping", "", "damping coefficient; the equation carries 2c, so c = sqrt(k m) is critical (>= 0)", lo=0.0),
+    "k": Field("k", "stiffness", "", "spring stiffness (>= 0)", lo=0.0),
     "g": Field("g", "endstop", "", "position of the rigid endstop; g > 0 preloads the spring, g < 0 is a gap"),
-    "r": Field("r", "restitution", "", "coefficient of restitution, 0 (plastic) to 1 (elastic)"),
-    "omega": Field("ω", "driving frequency", "rad/s", "angular frequency of the unit harmonic force (> 0)"),
+    "r": Field("r", "restitution", "", "coefficient of restitution, 0 (plastic) to 1 (elastic)", lo=0.0, hi=1.0),
+    "omega": Field("ω", "driving frequency", "rad/s", "angular frequency of the unit harmonic force (> 0)",
+                   lo=0.0, lo_open=True),
 }
 
 
@@ -56,16 +63,15 @@ def _as_float(name, value, problems):
 def _param_problems(values: dict) -> list[str]:
     problems: list[str] = []
     f = {n: _as_float(n, values[n], problems) for n in PARAM_NAMES}
-    if f["m"] <= 0:
-        problems.append(f"m={f['m']!r} must be > 0")
-    if f["c"] < 0:
-        problems.append(f"c={f['c']!r} must be >= 0")
-    if f["k"] < 0:
-        problems.append(f"k={f['k']!r} must be >= 0")
-    if not (0.0 <= f["r"] <= 1.0) and math.isfinite(f["r"]):
-        problems.append(f"r={f['r']!r} must lie in [0, 1]")
-    if f["omega"] <= 0:
-        problems.append(f"omega={f['omega']!r} must be > 0")
+    for n in PARAM_NAMES:
+        x, lo, hi = f[n], FIELDS[n].lo, FIELDS[n].hi
+        if hi is not None:
+            if not (lo <= x <= hi) and math.isfinite(x):
+                problems.append(f"{n}={x!r} must lie in [{lo:g}, {hi:g}]")
+        elif lo is not None and FIELDS[n].lo_open and x <= lo:
+            problems.append(f"{n}={x!r} must be > {lo:g}")
+        elif lo is not None and x < lo:
+            problems.append(f"{n}={x!r} must be >= {lo:g}")
     for n in PARAM_NAMES:
         if math.isfinite(f[n]) and abs(f[n]) > MAGNITUDE_MAX:
             problems.append(f"{n}={f[n]!r} is beyond {MAGNITUDE_MAX:g} in magnitude "

@@ -1,10 +1,19 @@
 """One module per view; each owns its Bokeh figure and ColumnDataSource, built once and
-updated in place with a single ``source.data = {...}`` assignment."""
+updated in place with a single ``source.data = {...}`` assignment.
+
+Adding a view: write ``app/views/<name>.py`` with a ``View`` subclass (see base.py) and
+list it in ``VIEWS`` below; the session builds it, lays it out and feeds it.
+"""
+from .base import View
 from .bifurcation import BifurcationView
 from .displacement import DisplacementView
 from .impact_map import ImpactMapView
 from .phase import PhaseView
 from .poincare import PoincareView
 
-__all__ = ["BifurcationView", "DisplacementView", "ImpactMapView", "PhaseView",
-           "PoincareView"]
+#: The views of a page, in page order.
+VIEWS: tuple[type[View], ...] = (DisplacementView, PhaseView, ImpactMapView, PoincareView,
+                                 BifurcationView)
+
+__all__ = ["VIEWS", "BifurcationView", "DisplacementView", "ImpactMapView", "PhaseView",
+           "PoincareView", "View"]

@@ -5,17 +5,24 @@ from __future__ import annotations
 import numpy as np
 from bokeh.models import ColumnDataSource, Range1d, Span
 
+from ..compute import last
 from ..state import Run
-from ._figure import IMPACT, WALL, make_figure
+from ._figure import IMPACT, POINTS_TOOLS, WALL, make_figure
+from .base import View
 
 COLUMNS = ("omega", "v", "t", "phase")
+#: Impacts of the current scene drawn on the marker.
+MARKER_IMPACTS = 200
 
 
 def _empty() -> dict:
     return {"omega": np.zeros(0), "v": np.zeros(0)}
 
 
-class BifurcationView:
+class BifurcationView(View):
+    key = "bifurcation"
+    wide = True
+
     def __init__(self):
         self.source = ColumnDataSource(_empty())
         self.current = ColumnDataSource(_empty())
@@ -23,7 +30,8 @@ class BifurcationView:
         self.title = "Bifurcation diagram"
         self.figure = make_figure("bifurcation_figure", "Bifurcation diagram",
                                   "driving frequency ω (rad/s)", "impact velocity ẋ(τ_I−)",
-                                  x_range=Range1d(0.1, 5.0), height=340)
+                                  x_range=Range1d(0.1, 5.0), height=340,
+                                  tools=POINTS_TOOLS + ",save")
         self.figure.scatter("omega", "v", source=self.source, size=2, color=WALL,
                             alpha=0.55, name="bifurcation")
         self.marker = Span(location=2.0, dimension="height", line_color=IMPACT,
@@ -33,7 +41,7 @@ class BifurcationView:
         self.figure.scatter("omega", "v", source=self.current, size=5, color=IMPACT,
                             name="bifurcation_current", level="overlay")
 
-    def reset(self, run: Run) -> None:
+    def diagram_started(self, run: Run) -> None:
         """A new diagram starts: clear the points, set the ω range and the title."""
         self.source.data = _empty()
         self.parts = []
@@ -43,7 +51,7 @@ class BifurcationView:
                       f"m = {p.m:g}, k = {p.k:g}, window [{run.t_record:g}, {run.t_end:g}] s")
         self.figure.title.text = self.title + " — computing"
 
-    def append(self, part: dict) -> None:
+    def diagram_chunk(self, part: dict) -> None:
         """Stream one chunk (only the new points travel to the browser)."""
         self.parts.append(part)
         shown = part["drawn"]
@@ -58,10 +66,11 @@ class BifurcationView:
         order = np.lexsort((cols["t"], cols["omega"]))
         return {c: cols[c][order] for c in COLUMNS}
 
-    def finish(self, text: str) -> None:
+    def diagram_finished(self, text: str) -> None:
         self.figure.title.text = f"{self.title} — {text}"
 
-    def move_marker(self, omega: float, v) -> None:
-        """Move the ω marker and show the current scene's impacts on it."""
+    def show_scene(self, scene) -> None:
+        """Move the ω marker and show the current scene's last impacts on it."""
+        omega, v = scene.run.params.omega, last(scene.impacts["v"], MARKER_IMPACTS)
         self.marker.location = omega
         self.current.data = {"omega": [omega] * len(v), "v": v}

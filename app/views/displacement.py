@@ -4,19 +4,22 @@ from __future__ import annotations
 from bokeh.models import ColumnDataSource, Range1d, Span
 
 from ..compute import SceneData
-from ._figure import IMPACT, LINE, WALL, make_figure
+from ._figure import IMPACT, LINE, TIME_SERIES_TOOLS, WALL, make_figure
+from .base import View
 
 #: The x axis opens on the last few periods; reset/zoom out shows the whole window.
 PERIODS_SHOWN = 8
 
 
-class DisplacementView:
+class DisplacementView(View):
+    key = "displacement"
+
     def __init__(self):
         self.source = ColumnDataSource({"t": [], "x": []})
         self.impacts = ColumnDataSource({"t": [], "x": []})
         self.figure = make_figure("displacement_figure", "Displacement x(τ)",
                                   "time τ (s)", "displacement x",
-                                  x_range=Range1d(0.0, 1.0))
+                                  x_range=Range1d(0.0, 1.0), tools=TIME_SERIES_TOOLS)
         self.wall = Span(location=0.0, dimension="width", line_color=WALL,
                          line_dash="dashed", line_width=1.5, name="displacement_wall")
         self.figure.add_layout(self.wall)
@@ -25,7 +28,7 @@ class DisplacementView:
         self.figure.scatter("t", "x", source=self.impacts, size=4, color=IMPACT,
                             name="displacement_impacts")
 
-    def update(self, scene: SceneData) -> None:
+    def show_scene(self, scene: SceneData) -> None:
         g = scene.run.params.g
         tr = scene.trajectory
         self.source.data = {"t": tr["t"], "x": tr["x"]}

@@ -5,9 +5,12 @@ from bokeh.models import ColumnDataSource, Range1d
 
 from ..compute import SceneData
 from ._figure import IMPACT, make_figure, padded, set_range
+from .base import View
 
 
-class ImpactMapView:
+class ImpactMapView(View):
+    key = "impact_map"
+
     def __init__(self):
         self.source = ColumnDataSource({"phase": [], "v": []})
         self.figure = make_figure("impact_map_figure", "Impact map",
@@ -16,7 +19,7 @@ class ImpactMapView:
         self.figure.scatter("phase", "v", source=self.source, size=5, color=IMPACT,
                             alpha=0.8, name="impact_map")
 
-    def update(self, scene: SceneData) -> None:
+    def show_scene(self, scene: SceneData) -> None:
         imp = scene.impacts
         self.source.data = {"phase": imp["phase"], "v": imp["v"]}
         T = scene.run.params.T

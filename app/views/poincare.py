@@ -5,9 +5,12 @@ from bokeh.models import ColumnDataSource, Range1d
 
 from ..state import Run
 from ._figure import LINE, make_figure, padded, set_range
+from .base import View
 
 
-class PoincareView:
+class PoincareView(View):
+    key = "poincare"
+
     def __init__(self):
         self.source = ColumnDataSource({"x": [], "v": []})
         self.figure = make_figure("poincare_figure", "Poincaré map", "displacement x",
@@ -16,7 +19,7 @@ class PoincareView:
         self.figure.scatter("x", "v", source=self.source, size=5, color=LINE, alpha=0.8,
                             name="poincare")
 
-    def update(self, run: Run, section: dict) -> None:
+    def show_section(self, run: Run, section: dict) -> None:
         self.source.data = {"x": section["x"], "v": section["v"]}
         set_range(self.figure.x_range, *padded(section["x"]))
         set_range(self.figure.y_range, *padded(section["v"]))

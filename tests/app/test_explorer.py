@@ -146,18 +146,18 @@ def read_csv(buf):
 
 def test_csv_downloads_hold_what_is_shown(make_explorer):
     e = make_explorer()
-    head, data = read_csv(e._impacts_csv())
+    head, data = read_csv(e.downloads.impacts_csv())
     assert head == ["t", "phase", "v_before", "v_after"]
     assert np.allclose(data[:, 2], e.impact_map.source.data["v"])
     assert np.allclose(data[:, 3], -0.8 * data[:, 2])
-    head, data = read_csv(e._poincare_csv())
+    head, data = read_csv(e.downloads.poincare_csv())
     assert head == ["t", "x", "v"] and np.allclose(data[:, 1], e.poincare.source.data["x"])
-    head, data = read_csv(e._bifurcation_csv())
+    head, data = read_csv(e.downloads.bifurcation_csv())
     assert head == ["omega", "v", "t", "phase"]
     shown = np.asarray(e.bifurcation.source.data["omega"])
     assert len(data) >= len(shown)
     assert np.allclose(np.unique(data[:, 0]), np.unique(shown), rtol=1e-9)
-    assert e.downloads[0].filename == "impacts_omega2_r0.8_c0.05_g0.csv"
+    assert e.downloads.widgets[0].filename == "impacts_omega2_r0.8_c0.05_g0.csv"
 
 
 def test_link_the_core_refuses_falls_back_to_defaults(make_explorer):
@@ -192,6 +192,7 @@ def test_extreme_physics_is_cut_short_with_a_message(make_explorer):
 def test_diagram_stops_at_its_wall_time(make_explorer, monkeypatch):
     from app import diagram
     monkeypatch.setattr(diagram, "DIAGRAM_WALL_TIME", 0.0)
+    diagram.CACHE.clear()                     # not a diagram computed before
     e = make_explorer(bif_n="200")
     assert e.diagram_status.object.startswith("stopped at the time limit")
     assert "partial" in e.bifurcation.figure.title.text

@@ -1,0 +1,27 @@
+"""The Panel workarounds hold for one Panel version: fail loudly when it changes."""
+import panel as pn
+import pytest
+
+from app import panel_fixes
+
+
+def test_installed_panel_is_the_one_the_workarounds_were_written_for():
+    panel_fixes.check_version()          # raises PanelVersionError naming both versions
+    assert pn.__version__ == panel_fixes.PANEL_VERSION
+
+
+def test_a_different_panel_fails_loudly():
+    with pytest.raises(panel_fixes.PanelVersionError, match="1.9.4.*1.10.0"):
+        panel_fixes.check_version("1.10.0")
+
+
+def test_the_private_parts_the_workarounds_touch_exist():
+    """What each workaround relies on, so a Panel that moved them fails here too."""
+    from panel.io import document as pdoc
+    from panel.links import Callback
+    from panel.reactive import Syncable
+
+    assert Syncable._debounce == 50                      # PromptFloatSlider's baseline
+    for name in ("_dispatch_msgs", "_dispatch_write_task", "_WRITE_BLOCK", "_WRITE_MSGS"):
+        assert hasattr(pdoc, name), name                 # deliver_stranded_writes
+    assert hasattr(Callback, "registry")                 # release_links
