@@ -5,6 +5,8 @@ from __future__ import annotations
 def warmup() -> None:
     from .basins import basins
     from .classify import classify
+    from .lyapunov import lyapunov
+    from .orbits import periodic_orbit
     from .model import Params
     from .simulate import simulate
     from .sweeps import bifurcation, regime_map
@@ -18,3 +20,6 @@ def warmup() -> None:
     bifurcation(p, "omega", [1.0, 2.0], t_end=20.0, t_record=10.0, warm_start="up", workers=1)
     regime_map(p, "omega", [1.0, 2.0], "r", [0.5, 0.8], t_end=20.0, t_record=10.0, workers=1)
     basins(p, (0.0, 0.5), (-0.5, 0.5), n=(2, 2), workers=1)
+    periodic_orbit(p)
+    lyapunov(p, t_end=40.0, t_record=20.0)
+    bifurcation(p, "omega", [1.0, 2.0], t_end=20.0, t_record=10.0, workers=1, lyapunov=True)

@@ -1,9 +1,17 @@
 import pytest
 
+import impactlib as il
 from app.explorer import Explorer
 
 #: A small diagram keeps the app tests quick; the browser tests use the real default.
 SMALL = {"bif_n": "40", "bif_min": "0.5", "bif_max": "4"}
+
+
+@pytest.fixture(scope="session", autouse=True)
+def _compiled_kernels():
+    """Compile the kernels first, as scripts/app.sh and the container do before serving:
+    a cold compile inside a session's first diagram would count against its time limit."""
+    il.warmup()
 
 
 @pytest.fixture
