@@ -3,6 +3,9 @@
     m x'' + 2 c x' + k x = cos(omega t)   for x > g;   x'(t+) = -r x'(t-) at x = g
 """
 from .classify import Motion, classify
+from .continuation import Branch, Event, continuation
+from .lyapunov import Lyapunov, lyapunov
+from .orbits import PeriodicOrbit, periodic_orbit
 from .model import FIELDS, METHODS, PARAM_NAMES, Params, RunLimits, rk4_stability_limit
 from .simulate import Impacts, Samples, Solution, simulate
 from .sweeps import Bifurcation, RegimeMap, bifurcation, iter_bifurcation, regime_map
@@ -10,4 +13,6 @@ from .warmup import warmup
 
 __all__ = ["FIELDS", "METHODS", "PARAM_NAMES", "Params", "RunLimits", "rk4_stability_limit",
            "Impacts", "Samples", "Solution", "simulate", "Motion", "classify",
-           "Bifurcation", "RegimeMap", "bifurcation", "iter_bifurcation", "regime_map", "warmup"]
+           "Bifurcation", "RegimeMap", "bifurcation", "iter_bifurcation", "regime_map", "warmup",
+           "PeriodicOrbit", "periodic_orbit", "Lyapunov", "lyapunov",
+           "Branch", "Event", "continuation"]

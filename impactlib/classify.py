@@ -4,18 +4,25 @@ n is the smallest number of forcing periods after which the Poincare points repe
 (to a tolerance relative to the orbit's size), m the number of impacts in those n
 periods.  A chatter summed to its accumulation point counts as infinitely many impacts
 (complete chattering); no repeat within ``max_period`` periods means period infinity.
+
+A motion without a period is called chaotic only when it earns it: :func:`classify`
+measures the largest Lyapunov exponent (:mod:`impactlib.lyapunov`) and requires it to be
+positive by more than twice its error estimate.
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from ._jit import jit
+from .lyapunov import grows_without_bound, lyapunov_from, no_dissipation
 
 PERIOD_RTOL = 1e-4    # transients of the paper's damping (c = 0.05) decay to ~1e-5 in 250 s
 MAX_PERIOD = 32
+CHAOS_SIGMAS = 2.0    # chaotic: largest exponent > CHAOS_SIGMAS x its error estimate
 SETTLE_R2 = 0.8       # log-distance decay this well fitted by a line counts as settling
 
 
@@ -89,8 +96,10 @@ class Motion:
     impacts: float          # m: int, or math.inf
     period: float           # n: int, or math.inf
     kind: str               # "periodic", "complete chattering", "chaotic", "not settled",
-                            # "no impact", "undetermined"
+                            # "no impact", "undetermined", "unbounded"
     label: str
+    lyapunov: float = math.nan         # largest exponent measured (non-periodic motion)
+    lyapunov_error: float = math.nan
 
     def __str__(self):
         return self.label
@@ -122,9 +131,62 @@ def describe(m: int, n: int) -> Motion:
 
 
 def classify(sol, rtol: float = PERIOD_RTOL, max_period: int = MAX_PERIOD) -> Motion:
-    """Classify a Solution as the paper does: (m impacts, period n) from its maps."""
+    """Classify a Solution as the paper does: (m impacts, period n) from its maps.
+
+    A motion whose Poincare points do not repeat is measured before it is named: the
+    largest Lyapunov exponent of the exact flow over a window as long as the solution's
+    own, continued from where the solution ends.  "chaotic" needs it positive by more than
+    CHAOS_SIGMAS times its error estimate; a negative one is a slow transient or a long
+    period; one within its error says the window is too short.  Without dissipation
+    (c = 0, r = 1) a motion whose impact speed keeps growing is "unbounded".  Runs by an
+    integrator (rk4, rk45) are judged against the exact flow: if that contracts, the
+    integrator's error is what kept the points from repeating.
+    """
     p = sol.params
     m, n = motion_class(np.ascontiguousarray(sol.poincare.x), np.ascontiguousarray(sol.poincare.v),
                         np.ascontiguousarray(sol.impacts.t), sol.t_end, p.T, sol.n_chatter,
                         rtol, max_period)
-    return describe(m, n)
+    motion = describe(m, n)
+    if motion.kind != "chaotic":
+        return motion
+    if no_dissipation(p) and grows_without_bound(sol.impacts.t, sol.impacts.v, sol.t_record,
+                                                 sol.t_end):
+        return Motion(math.nan, math.nan, "unbounded",
+                      "unbounded (no dissipation): the impact speed grows every cycle")
+    tf, xf, vf, stuck = sol.final
+    window = sol.t_end - sol.t_record
+    ly = lyapunov_from(p, tf, xf, vf, tf + window, tf)
+    lam, err = float(ly.exponents[0]), float(ly.error[0])
+    coarse = ""
+    if sol.method != "exact":
+        coarse = f"the {sol.method} run "
+    if ly.unbounded:
+        return Motion(math.nan, math.nan, "unbounded",
+                      "unbounded (no dissipation): the impact speed grows every cycle")
+    if ly.sticks:
+        return Motion(math.nan, math.nan, "not settled",
+                      "not settled (not periodic in the window, but the motion sticks to the "
+                      "wall: Lyapunov exponents -inf; lengthen the transient)", lam, 0.0)
+    if not math.isfinite(lam):
+        return Motion(math.nan, math.nan, "undetermined",
+                      f"undetermined (no Lyapunov exponent: {ly.message})")
+    meas = f"λ1 = {lam:.3g} ± {err:.2g}"
+    if lam > CHAOS_SIGMAS * err and not coarse:
+        return dataclasses.replace(motion, lyapunov=lam, lyapunov_error=err)
+    if coarse:
+        if lam < -CHAOS_SIGMAS * err:
+            return Motion(math.nan, math.nan, "undetermined",
+                          f"undetermined ({coarse}is too coarse: its points do not repeat, "
+                          f"but the exact flow here contracts, {meas}; use method='exact' "
+                          "or a tighter tolerance)", lam, err)
+        return Motion(math.nan, math.nan, "undetermined",
+                      f"undetermined ({coarse}is not periodic; the exact flow here has "
+                      f"{meas}; classify an exact run)", lam, err)
+    if lam < -CHAOS_SIGMAS * err:
+        return Motion(math.nan, math.nan, "not settled",
+                      f"not settled (no period up to {max_period}, but contracting, {meas}: "
+                      "a slow transient or a longer period)", lam, err)
+    return Motion(math.nan, math.nan, "undetermined",
+                  f"undetermined (not periodic; {meas} over a window of {window:g} time units is not "
+                  "positive beyond its error: lengthen the window)", lam, err)
+

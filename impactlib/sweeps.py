@@ -134,6 +134,7 @@ class Bifurcation:
     status: np.ndarray        # per value: run status (0 ok, 1/2 work limit, 3 output capped)
     n_impacts: np.ndarray     # per value: impacts in the window (kept or not)
     elapsed: float
+    lyapunov: np.ndarray | None = None   # per value: largest Lyapunov exponent (lyapunov=True)
 
     def __len__(self):
         return self.param.shape[0]
@@ -247,7 +248,7 @@ def bifurcation(p: Params, name: str, values, t_end: float = 500.0, t_record: fl
                 warm_start: bool | str = False, dt: float | None = None, rtol: float = 1e-6,
                 atol: float = 1e-9, workers: int | None = None,
                 cap_per_value: int = CAP_PER_VALUE, max_impacts: int = 1_000_000,
-                max_steps: int = 20_000_000) -> Bifurcation:
+                max_steps: int = 20_000_000, lyapunov: bool = False) -> Bifurcation:
     """Impact velocities against one parameter (the paper's Fig. 3).
 
     Parameters
@@ -269,6 +270,10 @@ def bifurcation(p: Params, name: str, values, t_end: float = 500.0, t_record: fl
         Threads; default all cores (the pool is shared by all callers in the process).
     cap_per_value : int
         Impacts kept per value; more are counted in ``n_impacts`` and flagged (status 3).
+    lyapunov : bool
+        Also the largest Lyapunov exponent of each value over [t_record, t_end], from the
+        same runs (``Bifurcation.lyapunov``; -inf where the motion sticks, NaN where it
+        grows without bound; see :mod:`impactlib.lyapunov`).  Exact method only.
 
     Returns
     -------
@@ -276,6 +281,11 @@ def bifurcation(p: Params, name: str, values, t_end: float = 500.0, t_record: fl
         Rows sorted by value index (then direction, then time); ``status`` and
         ``n_impacts`` aligned with ``values`` (worst status and total over directions).
     """
+    if lyapunov:
+        from .lyapunov import bifurcation_with_lyapunov
+        return bifurcation_with_lyapunov(p, name, values, t_end, t_record, method, x0, v0,
+                                         warm_start, dt, rtol, atol, workers, cap_per_value,
+                                         max_impacts, max_steps)
     t_end, t_record, x0c, v0, _, dt, rtol, atol = _check_sweep(
         p, [name], t_end, t_record, x0, v0, method, dt, rtol, atol)
     values = _values_array(name, values)

@@ -1,0 +1,97 @@
+"""Lyapunov exponents through impacts, against independent references: the Floquet
+multiplier of the periodic orbit, the exact determinant identity (sum rule), and a
+two-trajectory (Benettin) estimate from the exact simulator alone."""
+import math
+
+import numpy as np
+import pytest
+
+import impactlib as il
+
+from core_helpers import PAPER
+
+
+def benettin(p, t_start, t_stop, d0=1e-9):
+    """Largest exponent from two nearby trajectories of il.simulate, the separation
+    renormalised to d0 every forcing period (no tangent dynamics involved)."""
+    sol = il.simulate(p, t_end=t_start, t_record=t_start)
+    t, x, v, _ = sol.final
+    xb, vb = x + d0, v
+    acc = 0.0
+    while t < t_stop - 1e-9:
+        t1 = t + p.T
+        a = il.simulate(p, t_end=t1, t_record=t1, x0=x, v0=v, t0=t)
+        b = il.simulate(p, t_end=t1, t_record=t1, x0=max(xb, p.g), v0=vb, t0=t)
+        t, x, v = a.final[:3]
+        dx, dv = b.final[1] - x, b.final[2] - v
+        d = math.hypot(dx, dv)
+        acc += math.log(d / d0)
+        xb, vb = x + dx * d0 / d, v + dv * d0 / d
+    return acc / (t_stop - t_start)
+
+
+def sum_rule(p, ly):
+    return -2 * p.c / p.m + 2 * ly.nu * math.log(p.r)
+
+
+def test_periodic_exponent_equals_floquet_multiplier():
+    ly = il.lyapunov(PAPER, t_end=5000.0, t_record=500.0)
+    orb = il.periodic_orbit(PAPER)
+    ref = np.log(np.abs(orb.multipliers)) / PAPER.T
+    assert ly.exponents[0] == pytest.approx(ref[0], abs=1e-3)
+    assert ly.exponents[1] == pytest.approx(ref[1], abs=1e-3)
+    assert ly.n_impacts == pytest.approx(4500.0 / PAPER.T, abs=1)
+
+
+@pytest.mark.parametrize("omega", [2.0, 1.2, 2.8])
+def test_sum_rule(omega):
+    p = PAPER.replace(omega=omega)
+    ly = il.lyapunov(p, t_end=3000.0, t_record=500.0)
+    assert np.all(np.isfinite(ly.exponents))
+    assert ly.nu == ly.n_impacts / 2500.0
+    assert ly.exponents.sum() == pytest.approx(sum_rule(p, ly), abs=1e-8)
+
+
+def test_chaotic_exponent_positive_and_matches_benettin():
+    p = PAPER.replace(omega=2.8)
+    ly = il.lyapunov(p, t_end=5000.0, t_record=500.0)
+    assert ly.exponents[0] > 10 * ly.error[0] > 0
+    ref = benettin(p, 500.0, 5000.0)
+    # two estimates of one number over the same window: agree within their spread
+    assert ly.exponents[0] == pytest.approx(ref, abs=0.01)
+
+
+def test_sticking_gives_minus_infinity():
+    ly = il.lyapunov(PAPER.replace(omega=0.2), t_end=1000.0, t_record=250.0)
+    assert ly.sticks and np.all(ly.exponents == -math.inf)
+
+
+def test_undamped_elastic_resonance_is_unbounded_not_an_exponent():
+    ly = il.lyapunov(PAPER.replace(c=0.0, r=1.0), t_end=500.0, t_record=250.0)
+    assert ly.unbounded and np.all(np.isnan(ly.exponents))
+
+
+def test_bifurcation_strip_same_rows_and_exponents():
+    p = PAPER
+    w = [0.2, 2.0, 2.8]
+    plain = il.bifurcation(p, "omega", w, t_end=1500.0, t_record=250.0)
+    bif = il.bifurcation(p, "omega", w, t_end=1500.0, t_record=250.0, lyapunov=True)
+    np.testing.assert_array_equal(bif.v, plain.v)
+    np.testing.assert_array_equal(bif.t, plain.t)
+    assert plain.lyapunov is None and bif.values.shape == bif.lyapunov.shape
+    assert bif.lyapunov[0] == -math.inf
+    orb = il.periodic_orbit(p)
+    assert bif.lyapunov[1] == pytest.approx(math.log(abs(orb.multipliers[0])) / p.T, abs=5e-3)
+    assert bif.lyapunov[2] > 0.05
+    und = il.bifurcation(p.replace(c=0.0, r=1.0), "omega", [2.0], lyapunov=True)
+    assert np.isnan(und.lyapunov[0])
+
+
+@pytest.mark.parametrize("call, field", [
+    (lambda: il.lyapunov(PAPER, t_end=100.0, t_record=100.0), "t_record"),
+    (lambda: il.lyapunov(PAPER, x0=math.nan), "x0"),
+    (lambda: il.bifurcation(PAPER, "omega", [2.0], method="rk4", dt=0.01, lyapunov=True), "method"),
+])
+def test_bad_lyapunov_input_names_the_field(call, field):
+    with pytest.raises(ValueError, match=field):
+        call()
