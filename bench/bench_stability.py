@@ -3,6 +3,10 @@
     .venv/bin/python bench/bench_stability.py            # full run (about a minute)
     .venv/bin/python bench/bench_stability.py --quick    # fewer repeats
     .venv/bin/python bench/bench_stability.py --json out.json
+    .venv/bin/python bench/bench_stability.py --write    # also its section of BENCHMARKS.md
+
+``--write`` replaces the section between the stability markers at the end of BENCHMARKS.md
+(appending it if absent); bench_speed.py rewrites that file, so run this one after it.
 
 Targets from the issue:
   * a period-1 orbit with its multipliers in under 1 ms (Newton from a start on the
@@ -16,8 +20,10 @@ Targets from the issue:
 from __future__ import annotations
 
 import argparse
+import datetime as _dt
 import json
 import os
+import subprocess
 import sys
 import time
 from pathlib import Path
@@ -91,10 +97,55 @@ def bench_continuation(repeats):
             "events": events}
 
 
+BEGIN, END = "<!-- bench_stability:begin -->", "<!-- bench_stability:end -->"
+
+
+def markdown(out) -> str:
+    o, s, c = out["orbit"], out["strip"], out["continuation"]
+    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, text=True,
+                            capture_output=True).stdout.strip() or "?"
+    load = " ".join(f"{v:.2f}" for v in os.getloadavg())
+    rows = [
+        "## Stability and chaos (issue 8)",
+        "",
+        f"Written by `.venv/bin/python bench/bench_stability.py --write` on "
+        f"{_dt.datetime.now(_dt.timezone.utc):%Y-%m-%d %H:%M} UTC (commit {commit}; load "
+        f"average at the end {load}). Medians after warm-up.",
+        "",
+        "| what | time | target |",
+        "|---|---|---|",
+        f"| `periodic_orbit`, period-1 with multipliers, Newton from a start on the section "
+        f"| {o['from_start_s']['median'] * 1e3:.3f} ms ({o['iterations']} Newton steps) | < 1 ms |",
+        f"| the same with the default start (one settling run from rest) "
+        f"| {o['default_start_s']['median'] * 1e3:.3f} ms | |",
+    ]
+    for label, what in (("all_cores_wall", "wall time, all cores"),
+                        ("one_worker_cpu", "CPU time, one worker")):
+        f = s[label]
+        rows.append(f"| {s['values']}-value ω diagram, {what}: without / with the Lyapunov strip "
+                    f"| {f['diagram_s']:.3f} s / {f['with_strip_s']:.3f} s "
+                    f"({100 * f['overhead']:+.0f}%) | <= +50% |")
+    rows.append(f"| `continuation` over ω in [1, 5] (from ω = 2 both ways), with events "
+                f"| {c['omega_1_to_5_s']['median'] * 1e3:.1f} ms ({c['points']} points) | < 1 s |")
+    rows += ["", "Events found: " + ", ".join(f"{k} at ω = {v}" for k, v in c["events"]) + "."]
+    return "\n".join([BEGIN] + rows + [END]) + "\n"
+
+
+def write_section(text, path=ROOT / "BENCHMARKS.md"):
+    old = path.read_text() if path.exists() else ""
+    if BEGIN in old and END in old:
+        head, rest = old.split(BEGIN, 1)
+        new = head + text.rstrip("\n") + rest.split(END, 1)[1]
+    else:
+        new = old.rstrip("\n") + "\n\n" + text
+    path.write_text(new)
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--json", type=Path)
+    ap.add_argument("--write", action="store_true", help="update its section of BENCHMARKS.md")
     a = ap.parse_args(argv)
     reps = 3 if a.quick else 7
     print(f"impactlib stability benchmark; {os.cpu_count()} cores; workers "
@@ -119,6 +170,8 @@ def main(argv=None):
           f"events {c['events']}")
     if a.json:
         a.json.write_text(json.dumps(out, indent=2))
+    if a.write:
+        write_section(markdown(out))
 
 
 if __name__ == "__main__":

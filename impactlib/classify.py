@@ -19,6 +19,7 @@ import numpy as np
 
 from ._jit import jit
 from .lyapunov import grows_without_bound, lyapunov_from, no_dissipation
+from .model import RunLimits
 
 PERIOD_RTOL = 1e-4    # transients of the paper's damping (c = 0.05) decay to ~1e-5 in 250 s
 MAX_PERIOD = 32
@@ -155,7 +156,9 @@ def classify(sol, rtol: float = PERIOD_RTOL, max_period: int = MAX_PERIOD) -> Mo
                       "unbounded (no dissipation): the impact speed grows every cycle")
     tf, xf, vf, stuck = sol.final
     window = sol.t_end - sol.t_record
-    ly = lyapunov_from(p, tf, xf, vf, tf + window, tf)
+    # at most about the work of the solution itself
+    budget = RunLimits(max_impacts=2 * sol.n_impacts + 1000, max_steps=2 * sol.nsteps + 10000)
+    ly = lyapunov_from(p, tf, xf, vf, tf + window, tf, limits=budget)
     lam, err = float(ly.exponents[0]), float(ly.error[0])
     coarse = ""
     if sol.method != "exact":

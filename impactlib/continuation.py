@@ -41,7 +41,7 @@ Period doubling to n = 2: at a period doubling the period-n orbit, counted as a
 2n-period orbit, is a branch point of the 2n-period problem (its Jacobian gains a null
 vector).  :func:`continuation` started there with the doubled n steps off along that
 null vector onto the doubled branch (branch switching as in Kuznetsov, Elements of
-Applied Bifurcation Theory, 3rd ed., Sec. 10.2).
+Applied Bifurcation Theory, 3rd ed., ch. 10).
 """
 from __future__ import annotations
 

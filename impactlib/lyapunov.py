@@ -4,8 +4,8 @@ The tangent matrix J follows the exact trajectory: between impacts J <- Phi(s) J
 closed-form flow Jacobian), at an impact J <- S J (the saltation matrix), at a sticking
 phase J <- 0 (see :mod:`impactlib.tangent`).  After every impact and at the edges of the
 sub-windows J is re-orthonormalised, J = Q R, J <- Q, and log|R11|, log|R22| are summed
-(Benettin et al. 1980 with the discontinuity handled as in Müller 1995).  Over the record
-window [t_record, t_end] of length tau,
+(Benettin et al., Meccanica 15 (1980) 9-20, with the impacts handled as in Müller 1995).
+Over the record window [t_record, t_end] of length tau,
 
     lambda_i = (1 / tau) sum log|R_ii|,
 
@@ -80,19 +80,19 @@ def grows_without_bound(imp_t, imp_v, t_lo, t_hi) -> bool:
     return bool(np.all(np.diff(peaks) > 0) and peaks[-1] > GROWTH * peaks[0])
 
 
-def lyapunov_run(p: Params, t0, x0, v0, t_end, t_record, windows=WINDOWS, keep_impacts=False):
+def lyapunov_run(p: Params, t0, x0, v0, t_end, t_record, windows=WINDOWS, keep_impacts=False,
+                 limits: RunLimits = RunLimits()):
     """The kernel run behind :func:`lyapunov`, from time t0 (validated inputs)."""
     sp, rate, hmax = run_constants(p)
     marks = np.linspace(t_record, t_end, windows + 1)
     logs = np.zeros((windows, 2))
     cap = 0
     if keep_impacts or no_dissipation(p):
-        cap = int(min(RunLimits().max_impacts, 8 * ((t_end - t_record) / p.T + 2) + 1024))
+        cap = int(min(limits.max_impacts, 8 * ((t_end - t_record) / p.T + 2) + 1024))
     imp_t = np.empty(cap)
     imp_v = np.empty(cap)
-    lim = RunLimits()
     out = tangent_run(sp, t0, x0, v0, t_end, t_record, hmax, rate, marks, True, imp_t, imp_v,
-                      logs, lim.max_impacts, lim.max_steps)
+                      logs, limits.max_impacts, limits.max_steps)
     (status, n_rec, n_tot, tf, xf, vf, stuck, nsteps, _, _, _, _, stuck_m, n_m, vmin,
      n_tail) = out
     k = min(n_rec, cap)
@@ -120,9 +120,10 @@ def lyapunov(p: Params, t_end: float = 5000.0, t_record: float = 500.0, x0: floa
         ``exponents`` descending; -inf for both where the motion sticks in the window
         (its Jacobian vanishes); NaN where it grows without bound (c = 0, r = 1).
     """
+    # no Poincare samples are kept, so the sample budget of check_run does not apply
     t_end, t_record, x0, v0, _, _, _, _ = check_run(
         p, t_end=t_end, t_record=t_record, x0=x0, v0=v0, phase=0.0, method="exact", dt=None,
-        rtol=1e-6, atol=1e-9, dense=0, limits=RunLimits())
+        rtol=1e-6, atol=1e-9, dense=0, limits=RunLimits(max_samples=2 ** 62))
     if not t_record < t_end:
         raise ValueError(f"invalid run: t_record={t_record!r} must be < t_end={t_end!r} "
                          "(the exponents average over [t_record, t_end])")
@@ -131,10 +132,11 @@ def lyapunov(p: Params, t_end: float = 5000.0, t_record: float = 500.0, x0: floa
     return lyapunov_from(p, 0.0, x0, v0, t_end, t_record, int(windows))
 
 
-def lyapunov_from(p, t0, x0, v0, t_end, t_record, windows=WINDOWS) -> Lyapunov:
-    """:func:`lyapunov` from time t0 (inputs already validated)."""
+def lyapunov_from(p, t0, x0, v0, t_end, t_record, windows=WINDOWS,
+                  limits: RunLimits = RunLimits()) -> Lyapunov:
+    """:func:`lyapunov` from time t0 (inputs already validated), within ``limits``."""
     logs, marks, status, stuck, n_m, imp_t, imp_v, final = lyapunov_run(
-        p, t0, x0, v0, t_end, t_record, windows)
+        p, t0, x0, v0, t_end, t_record, windows, limits=limits)
     tau = t_end - t_record
     nu = n_m / tau
     unbounded = no_dissipation(p) and grows_without_bound(imp_t, imp_v, t_record, t_end)
@@ -280,13 +282,11 @@ def bifurcation_with_lyapunov(p, name, values, t_end, t_record, method, x0, v0, 
             order = np.arange(j, n, nchunks)
             jobs.append((0, order, ex.submit(run, order, False)))
     parts = []
-    lam_sum = np.zeros(n)
-    lam_cnt = np.zeros(n)
+    lam_all = np.full(n, -math.inf)
     for d, order, fut in jobs:
         out_t, out_v, counts, st, lam = fut.result()
         parts.append((order, st, counts, sweeps._rows(values, order, T_of, out_t, out_v, counts, d)))
-        np.add.at(lam_sum, order, lam)
-        np.add.at(lam_cnt, order, 1)
+        # warm "both": the larger of the two directions' exponents (NaN if either is)
+        lam_all[order] = np.maximum(lam_all[order], lam)
     bif = sweeps.merge_parts(name, values, parts, time.perf_counter() - tic)
-    # warm "both": the mean of the two directions' exponents
-    return dataclasses.replace(bif, lyapunov=lam_sum / lam_cnt)
+    return dataclasses.replace(bif, lyapunov=lam_all)

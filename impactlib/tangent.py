@@ -19,7 +19,7 @@ Saltation matrix
 An impact at t_i is the crossing of the surface h(y) = x - g = 0 followed by the reset
 y+ = R y- with R = diag(1, -r).  Perturbing the state before the impact moves the
 impact time by dt = -n.dy / (n.f-) with n = (1, 0), so the Jacobian across the impact is
-(Müller 1995, Eq. 21; Leine & Nijmeijer 2004, Sec. 7.1)
+(Müller 1995; Leine & Nijmeijer 2004, ch. 7)
 
     S = R + (f+ - R f-) n^T / (n^T f-) = [[-r, 0], [(a+ + r a-) / v-, -r]],
 

@@ -55,6 +55,9 @@ def test_r06_period_doubling_near_267_located(r06):
     pd = [e for e in r06.events if e[0] == "period-doubling"]
     assert len(pd) == 1 and pd[0].value == pytest.approx(2.67, abs=0.02)
     assert_crossing(pd[0], "omega", -1.0)
+    # at the located point the simulator's map has the multiplier -1 itself
+    mu = fd_multipliers(pd[0].params, pd[0].x, pd[0].v, 1)
+    assert np.min(np.abs(mu + 1)) < 1e-5
     # stable before, unstable after
     i = pd[0].index
     assert r06.stable[i - 1] and not r06.stable[i + 1]
@@ -119,6 +122,11 @@ def test_grazing_demo_saddle_node_then_grazing_at_the_closed_form_amplitude():
     # the fold just past the grazing value, where the branch turns back
     assert -amplitude - 0.05 < sn.value < -amplitude
     assert sn.value == pytest.approx(br.param.min(), abs=1e-9)
+    # at the located fold the simulator's map has the multiplier +1 (finite differences;
+    # the impact speed there is 0.04, so the map's curvature ~ 1/v^3 calls for a small step:
+    # truncation ~1e-6, rounding ~1e-16 * 10 / h ~ 3e-8)
+    mu = fd_multipliers(sn.params, sn.x, sn.v, 1, h=3e-8)
+    assert np.min(np.abs(mu - 1)) < 2e-5
     assert gr.value == pytest.approx(-amplitude, abs=1e-4)
     assert br.stable[sn.index - 1] and not br.stable[sn.index + 1]
     assert br.impact_velocities[-1, 0] == pytest.approx(0.0, abs=1e-6)

@@ -87,6 +87,17 @@ def test_bifurcation_strip_same_rows_and_exponents():
     assert np.isnan(und.lyapunov[0])
 
 
+def test_bifurcation_strip_warm_start_rows_unchanged():
+    w = [2.0, 2.5, 2.8]
+    for warm in ("up", "both"):
+        plain = il.bifurcation(PAPER, "omega", w, t_end=300.0, t_record=150.0, warm_start=warm)
+        bif = il.bifurcation(PAPER, "omega", w, t_end=300.0, t_record=150.0, warm_start=warm,
+                             lyapunov=True)
+        np.testing.assert_array_equal(bif.v, plain.v)
+        np.testing.assert_array_equal(bif.direction, plain.direction)
+        assert np.all(np.isfinite(bif.lyapunov)) and bif.lyapunov[0] < 0
+
+
 @pytest.mark.parametrize("call, field", [
     (lambda: il.lyapunov(PAPER, t_end=100.0, t_record=100.0), "t_record"),
     (lambda: il.lyapunov(PAPER, x0=math.nan), "x0"),

@@ -126,3 +126,28 @@ def test_non_convergence_is_a_result():
 def test_bad_orbit_input_names_the_field(kwargs, field):
     with pytest.raises(ValueError, match=field):
         il.periodic_orbit(PAPER, **kwargs)
+
+
+def test_contract_names_and_signatures():
+    """The names and call signatures issue 8 calls a contract."""
+    import inspect
+    sig = lambda f: [(q.name, q.default) for q in inspect.signature(f).parameters.values()]  # noqa: E731
+    e = inspect.Parameter.empty
+    assert sig(il.periodic_orbit) == [("p", e), ("n", 1), ("x0", None), ("v0", None), ("phase", 0.0)]
+    assert sig(il.lyapunov)[:5] == [("p", e), ("t_end", 5000.0), ("t_record", 500.0), ("x0", None),
+                                    ("v0", 0.0)]
+    assert sig(il.continuation) == [("p", e), ("name", e), ("stop", e), ("n", 1), ("x0", None),
+                                    ("v0", None), ("phase", 0.0), ("ds", None), ("max_points", 2000)]
+    assert inspect.signature(il.bifurcation).parameters["lyapunov"].default is False
+    orb = il.periodic_orbit(PAPER)
+    for a in ("x", "v", "n", "impacts", "label", "multipliers", "stable", "admissible",
+              "converged", "residual"):
+        assert hasattr(orb, a)
+    assert orb.multipliers.dtype == complex and orb.multipliers.shape == (2,)
+    ly = il.lyapunov(PAPER, t_end=300.0, t_record=100.0)
+    assert ly.exponents.shape == ly.error.shape == (2,) and ly.n_impacts > 0
+    br = il.continuation(PAPER, "omega", 2.2)
+    k = br.param.shape[0]
+    assert br.x.shape == br.v.shape == br.stable.shape == br.admissible.shape == (k,)
+    assert br.multipliers.shape == (k, 2) and br.multipliers.dtype == complex
+    assert isinstance(br.events, list)
