@@ -17,12 +17,14 @@ from .settings import SETTINGS
 
 SIDEBAR_WIDTH = 310
 STATUS_NAME = "bifurcation_status"
+STABILITY_NAME = "stability_readout"
 CAPTION = ("Paper defaults: m = 1, c = 0.05, k = 1, g = 0, r = 0.8, ω = 2. "
            "Pick a scene of the paper or move a slider.")
 CHANGED_NOTE = "\n\n*Settings changed since this scene was loaded.*"
 CSS = """
 .ie-badge {font-size: 16px;}
 .ie-badge b {color: #1f5fa8;}
+.ie-stability {font-size: 14px;}
 .ie-accuracy td, .ie-accuracy th {padding: 2px 6px; font-size: 12px; text-align: left;}
 """
 
@@ -54,6 +56,9 @@ def make_widget(settings, s):
     if s.widget == "slider":
         return EditableSlider.from_param(par, start=s.soft[0], end=s.soft[1], step=s.step,
                                          format=s.fmt, **common)
+    if s.widget == "checkbox":
+        return pn.widgets.Checkbox.from_param(par, name=s.label, margin=(8, 10),
+                                              css_classes=common["css_classes"])
     if s.widget == "select":
         return pn.widgets.Select.from_param(par, description=s.doc, **common)
     cls = pn.widgets.IntInput if s.kind == "integer" else pn.widgets.FloatInput
@@ -73,6 +78,9 @@ class Controls:
                                           sizing_mode="stretch_width")
         self.badge = pn.pane.HTML("", css_classes=["ie-badge"], sizing_mode="stretch_width",
                                   stylesheets=[CSS])
+        self.stability = NamedHTML("", model_name=STABILITY_NAME,
+                                   css_classes=["ie-stability"], stylesheets=[CSS],
+                                   sizing_mode="stretch_width")
         self.caption = pn.pane.Markdown(CAPTION, css_classes=["ie-caption"],
                                         sizing_mode="stretch_width")
         self.scene_buttons = []
@@ -133,7 +141,8 @@ class Controls:
                            collapsed=True, **card),
             width=SIDEBAR_WIDTH)
         pane = dict(sizing_mode="stretch_width")
-        grid = pn.GridBox(*(pn.pane.Bokeh(v.figure, **pane) for v in views if not v.wide),
+        grid = pn.GridBox(*(pn.pane.Bokeh(v.figure, **pane) for v in views
+                            if not v.wide and v.figure is not None),
                           ncols=2, sizing_mode="stretch_width")
         main = pn.Column(
             pn.pane.Markdown("## Impact Explorer — forced oscillator with a rigid endstop",
@@ -142,9 +151,10 @@ class Controls:
             pn.FlexBox(*self.scene_buttons, sizing_mode="stretch_width"),
             self.caption,
             self.badge,
+            self.stability,
             grid,
             pn.Row(self.progress, self.diagram_status, sizing_mode="stretch_width"),
-            *(pn.pane.Bokeh(v.figure, **pane) for v in views if v.wide),
+            *(pn.pane.Bokeh(v.figure, **pane) for v in views if v.wide and v.figure is not None),
             sizing_mode="stretch_width")
         return pn.Row(sidebar, main, sizing_mode="stretch_width")
 
@@ -171,6 +181,10 @@ class Controls:
             warn = f" <span style='color:#b35900'>⚠ {scene.message}</span>"
         self.badge.object = (f"Motion: <b>{scene.label}</b> · {scene.run.method} · computed "
                              f"in {scene.elapsed * 1e3:.2f} ms{warn}")
+
+    def show_stability(self, html: str | None) -> None:
+        """The stability readout (``stability_readout``); None while it is computed."""
+        self.stability.object = html or "Stability: computing…"
 
     def show_caption(self, text: str) -> None:
         self.caption.object = text

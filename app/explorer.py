@@ -18,7 +18,7 @@ from concurrent.futures import ThreadPoolExecutor
 
 import panel as pn
 
-from . import accuracy, compute, diagram, state
+from . import accuracy, compute, diagram, stability, state
 from .controls import Controls
 from .downloads import Downloads
 from .jobs import Job, session_dispatcher, session_doc
@@ -31,6 +31,7 @@ log = logging.getLogger(__name__)
 
 _SCENE_POOL = ThreadPoolExecutor(max_workers=2, thread_name_prefix="impact-scene")
 _ACCURACY_POOL = ThreadPoolExecutor(max_workers=1, thread_name_prefix="impact-accuracy")
+_STABILITY_POOL = ThreadPoolExecutor(max_workers=1, thread_name_prefix="impact-stability")
 
 
 class Explorer(pn.viewable.Viewer):
@@ -64,6 +65,10 @@ class Explorer(pn.viewable.Viewer):
             "accuracy", lambda run, t: accuracy.to_html(accuracy.compare_methods(run)),
             dispatch, pool=None if doc is None else _ACCURACY_POOL,
             on_result=self._accuracy_done)
+        self.readout = None               # the stability readout shown (stability.Readout)
+        self.stability_job = Job("stability", lambda run, t: stability.readout(run), dispatch,
+                                 pool=None if doc is None else _STABILITY_POOL,
+                                 on_result=self._stability_done)
         self.settings.param.watch(self._on_settings, list(QUERY_NAMES))
         self._apply()
         if errors:
@@ -86,7 +91,7 @@ class Explorer(pn.viewable.Viewer):
 
     def _on_session_destroyed(self, session_context) -> None:
         """The tab is gone: stop its jobs and let the whole session be collected."""
-        for job in (self.scene_job, self.runner, self.accuracy_job):
+        for job in (self.scene_job, self.runner, self.accuracy_job, self.stability_job):
             job.cancel()
         self.release_links()
 
@@ -121,6 +126,10 @@ class Explorer(pn.viewable.Viewer):
             return
         if self._wanted is None or run.diagram_key() != self._wanted.diagram_key():
             self._restart_diagram(run)
+        if self._wanted is None or (stability.readout_key(run)
+                                    != stability.readout_key(self._wanted)):
+            self.controls.show_stability(None)
+            self.stability_job.submit(run)
         self._wanted = run
         self.scene_job.submit(run)
 
@@ -197,6 +206,13 @@ class Explorer(pn.viewable.Viewer):
         if isinstance(result, Exception):
             result = f"accuracy failed: {type(result).__name__}: {result}"
         self.controls.show_accuracy(result)
+
+    def _stability_done(self, run, result) -> None:
+        if isinstance(result, Exception):     # never raise into Panel
+            log.warning("stability readout failed: %s: %s", type(result).__name__, result)
+            result = stability.Readout("failed", f"no readout: {type(result).__name__}")
+        self.readout = result
+        self.controls.show_stability(stability.to_html(result))
 
     def _mark_caption(self) -> None:
         if self._scene_run is not None and self.run is not None:

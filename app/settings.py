@@ -40,8 +40,8 @@ class Setting:
     doc: str
     affects: frozenset            # results that depend on it (SCENE, SECTION, DIAGRAM)
     group: str                    # sidebar card
-    widget: str = "input"         # "slider" | "input" | "select"
-    kind: str = "number"          # "number" | "integer" | "choice"
+    widget: str = "input"         # "slider" | "input" | "select" | "checkbox"
+    kind: str = "number"          # "number" | "integer" | "choice" | "flag" (on/off)
     lo: float | None = None       # valid range; None: unbounded
     hi: float | None = None
     lo_open: bool = False
@@ -145,7 +145,8 @@ SETTINGS: tuple[Setting, ...] = (
 BY_NAME = {s.name: s for s in SETTINGS}
 #: Every URL query name, in the order of SETTINGS.
 QUERY_NAMES = tuple(s.name for s in SETTINGS)
-NUMBER_FIELDS = tuple(s.name for s in SETTINGS if s.kind != "choice")
+NUMBER_FIELDS = tuple(s.name for s in SETTINGS if s.kind not in ("choice", "flag"))
+FLAG_FIELDS = tuple(s.name for s in SETTINGS if s.kind == "flag")
 SCENE_FIELDS = frozenset(s.name for s in SETTINGS if SCENE in s.affects)
 SECTION_FIELDS = frozenset(s.name for s in SETTINGS if SECTION in s.affects)
 DIAGRAM_FIELDS = frozenset(s.name for s in SETTINGS if DIAGRAM in s.affects)
@@ -170,6 +171,8 @@ def _parameter(s: Setting) -> param.Parameter:
     common = dict(label=s.label, doc=s.doc)
     if s.kind == "choice":
         return param.Selector(default=s.default, objects=list(s.choices), **common)
+    if s.kind == "flag":
+        return param.Boolean(s.default, **common)
     cls = param.Integer if s.kind == "integer" else param.Number
     extra = {"softbounds": s.soft} if s.soft else {}
     if s.step is not None:

@@ -18,8 +18,12 @@ from collections.abc import Mapping
 
 import impactlib as il
 
-from .settings import (BY_NAME, DIAGRAM_FIELDS, METHODS, NUMBER_FIELDS, QUERY_NAMES,
-                       RUN_FIELDS, SCENE_FIELDS, SETTINGS, Settings)
+from .settings import (BY_NAME, DIAGRAM_FIELDS, FLAG_FIELDS, METHODS, NUMBER_FIELDS,
+                       QUERY_NAMES, RUN_FIELDS, SCENE_FIELDS, SETTINGS, Settings)
+
+#: How a flag may be spelled in the URL.
+FLAG_TEXT = {"1": True, "true": True, "on": True, "yes": True,
+             "0": False, "false": False, "off": False, "no": False, "": False}
 
 __all__ = ["METHODS", "QUERY_NAMES", "Run", "Settings", "defaults", "initial_settings",
            "parse_query", "snapshot", "to_query", "validate"]
@@ -111,6 +115,12 @@ def validate(values: Mapping) -> Run:
             clean[name] = float(v)          # still usable by the checks between fields
         else:
             clean[name] = float(v)
+    for name in FLAG_FIELDS:
+        v = values.get(name, False)
+        if isinstance(v, bool):
+            clean[name] = v
+        else:
+            errors.append(f"{name}: {_short(v)} is not on or off")
     method = values.get("method")
     if method not in METHODS:
         errors.append(f"method: {_short(method)} is not one of {', '.join(METHODS)}")
@@ -170,6 +180,12 @@ def parse_query(args: Mapping[str, object]) -> tuple[dict, list[str]]:
             else:
                 errors.append(f"{name}: {_short(text)} is not one of {', '.join(s.choices)}")
             continue
+        if s.kind == "flag":
+            if text.lower() in FLAG_TEXT:
+                values[name] = FLAG_TEXT[text.lower()]
+            else:
+                errors.append(f"{name}: {_short(text)} is not 1 or 0")
+            continue
         if s.optional and text.lower() in ("", "none"):
             values[name] = None
             continue
@@ -210,7 +226,9 @@ def to_query(run: Run) -> dict[str, str]:
     for s in SETTINGS:
         v = (getattr(run.params, s.name) if s.physical else
              run.psi if s.name == "psi" else getattr(run, s.name))
-        if v is not None:
+        if isinstance(v, bool):
+            q[s.name] = "1" if v else "0"
+        elif v is not None:
             q[s.name] = v if isinstance(v, str) else repr(v)
     return q
 

@@ -1,0 +1,131 @@
+"""The stability readout, strip and branch overlay of a session, without a browser.
+
+References are independent of the app and of impactlib's orbit code: the period-1 orbit
+is solved here by scipy.optimize.root on the closed-form flight, its multipliers by
+central differences of a closed-form one-period map (impact time by brentq); the
+Lyapunov sum rule is an exact identity."""
+import math
+
+import numpy as np
+import pytest
+from scipy.optimize import brentq, root
+
+import impactlib as il
+from app import stability
+
+# -- closed-form flight of the paper's oscillator (underdamped), written here ------------
+
+
+def flight(p, t1, x1, v1, t):
+    """State at t of the free flight from (x1, v1) at t1: homogeneous + particular."""
+    a = p.c / p.m
+    wd = math.sqrt(p.k / p.m - a * a)
+    det = p.k - p.m * p.omega ** 2
+    d = det ** 2 + (2 * p.c * p.omega) ** 2
+    P, Q = det / d, 2 * p.c * p.omega / d
+
+    def xp(s):
+        return P * math.cos(p.omega * s) + Q * math.sin(p.omega * s)
+
+    def vp(s):
+        return p.omega * (Q * math.cos(p.omega * s) - P * math.sin(p.omega * s))
+    A = x1 - xp(t1)
+    B = (v1 - vp(t1) + a * A) / wd
+    s = t - t1
+    e = math.exp(-a * s)
+    x = e * (A * math.cos(wd * s) + B * math.sin(wd * s)) + xp(t)
+    v = e * ((-a * A + wd * B) * math.cos(wd * s) + (-a * B - wd * A) * math.sin(wd * s)) + vp(t)
+    return x, v
+
+
+def period_one_orbit(p, guess):
+    """(t1, u): impact time in [0, T) and impact velocity of a 1-impact period-1 orbit:
+    the flight from (g, -r u) at t1 is back at (g, u) at t1 + T."""
+    def residual(z):
+        x, v = flight(p, z[0], p.g, -p.r * z[1], z[0] + p.T)
+        return [x - p.g, v - z[1]]
+    sol = root(residual, guess, method="hybr", options={"xtol": 1e-14})
+    assert max(map(abs, residual(sol.x))) < 1e-12
+    return sol.x[0] % p.T, sol.x[1]
+
+
+def one_period_map(p, x, v, t_impact_guess):
+    """The stroboscopic map from (x, v) at t = 0 to t = T with one impact, near the
+    orbit: the impact time by brentq on x(t) = g around the guess, then the reset."""
+    f = lambda t: flight(p, 0.0, x, v, t)[0] - p.g  # noqa: E731
+    ti = brentq(f, t_impact_guess - 0.05, t_impact_guess + 0.05, xtol=1e-15)
+    _, vi = flight(p, 0.0, x, v, ti)
+    return np.array(flight(p, ti, p.g, -p.r * vi, p.T))
+
+
+def test_paper_defaults_readout_is_the_closed_form_period_one_orbit(make_explorer):
+    e = make_explorer()
+    r = e.readout
+    assert r.kind == "orbit" and r.verdict == "stable"
+    p = il.Params()
+    t1, u = period_one_orbit(p, [2.0, -0.5])
+    x, v = flight(p, t1, p.g, -p.r * u, p.T)            # on the section t = T ≡ 0
+    orb = r.orbit
+    assert orb.label == "1-impact period-1" and orb.n == 1 and orb.impacts == 1
+    assert abs(orb.x - x) < 1e-9 and abs(orb.v - v) < 1e-9
+    h = 1e-6
+    J = np.empty((2, 2))
+    for j in range(2):
+        dz = np.zeros(2)
+        dz[j] = h
+        J[:, j] = (one_period_map(p, *(np.array([x, v]) + dz), t1)
+                   - one_period_map(p, *(np.array([x, v]) - dz), t1)) / (2 * h)
+    ref = np.sort(np.abs(np.linalg.eigvals(J)))[::-1]
+    assert np.allclose(np.abs(orb.multipliers), ref, atol=1e-6)
+    assert abs(ref[0] - 0.69) < 0.01 and abs(ref[1] - 0.68) < 0.01     # the issue's figures
+    assert np.all(np.abs(np.imag(orb.multipliers)) < 1e-12)
+    text = e.controls.stability.object
+    for frag in ("1-impact period-1", f"{ref[0]:.4f}", f"{ref[1]:.4f}", "stable"):
+        assert frag in text, (frag, text)
+
+
+def test_sticking_is_said_plainly(make_explorer):
+    e = make_explorer(omega="0.2")
+    r = e.readout
+    assert r.sticks
+    text = e.controls.stability.object
+    assert "sticks to the wall" in text
+    if r.kind == "orbit":
+        assert np.all(r.orbit.multipliers == 0) and "multipliers 0" in text
+    else:
+        assert np.all(r.lyapunov.exponents == -math.inf) and "−∞" in text
+
+
+def test_non_periodic_motion_shows_exponents_with_the_sum_rule(make_explorer):
+    e = make_explorer(omega="2.8")
+    r = e.readout
+    assert r.kind == "exponents" and r.orbit is None
+    ly = r.lyapunov
+    p = il.Params(omega=2.8)
+    tau = ly.window[1] - ly.window[0]
+    # exact identity: lambda1 + lambda2 = -2c/m + 2 nu ln r, nu impacts per unit time
+    nu = ly.n_impacts / tau
+    assert abs(ly.exponents.sum() - (-2 * p.c / p.m + 2 * nu * math.log(p.r))) < 1e-8
+    # the label is earned: chaotic only when lambda1 exceeds twice its error
+    assert ("chaotic" in r.verdict) == bool(ly.exponents[0] > 2 * ly.error[0])
+    text = e.controls.stability.object
+    assert "λ1" in text and "±" in text
+
+
+def test_readout_is_shared_between_sessions_and_ignores_the_method(make_explorer):
+    a = make_explorer(omega="2.62")
+    b = make_explorer(omega="2.62", method="rk4")
+    assert a.readout is b.readout
+    assert stability.readout_key(a._wanted) == stability.readout_key(b._wanted)
+
+
+def test_bad_settings_keep_the_last_readout(make_explorer):
+    e = make_explorer()
+    before = e.readout
+    e.settings.r = 1.5
+    assert "r" in e.message and e.readout is before
+
+
+@pytest.mark.parametrize("x,n", [(np.array([1.0, 2.0] * 5), 2), (np.arange(10.0), 0)])
+def test_repeat_period(x, n):
+    assert stability.repeat_period(x, x) == n
