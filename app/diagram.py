@@ -85,11 +85,13 @@ def drawn(omega: np.ndarray, v: np.ndarray) -> np.ndarray:
 
 def compute_chunk(run: Run, values: np.ndarray) -> dict:
     """Impacts only (no dense output), exact method, independent starts, the core's
-    parallel sweep; at most MAX_IMPACTS_PER_VALUE impacts kept per value."""
+    parallel sweep; at most MAX_IMPACTS_PER_VALUE impacts kept per value. The same runs
+    carry the tangent dynamics: ``lyapunov`` is the largest exponent of each of
+    ``values`` (-inf where the motion sticks, NaN where it is undefined)."""
     scale = max(1.0, run.t_end / 500.0)
     bif = il.bifurcation(run.params, "omega", values, t_end=run.t_end,
                          t_record=run.t_record, method="exact", x0=run.x0, v0=run.v0,
-                         warm_start=False, cap_per_value=MAX_IMPACTS_PER_VALUE,
+                         warm_start=False, cap_per_value=MAX_IMPACTS_PER_VALUE, lyapunov=True,
                          max_impacts=int(DIAGRAM_MAX_IMPACTS_PER_500S * scale),
                          max_steps=int(DIAGRAM_MAX_STEPS_PER_500S * scale))
     status = np.asarray(bif.status)
@@ -97,13 +99,16 @@ def compute_chunk(run: Run, values: np.ndarray) -> dict:
     return {"omega": omega, "v": v,
             "t": np.asarray(bif.t, dtype=float), "phase": np.asarray(bif.phase, dtype=float),
             "drawn": drawn(omega, v),
+            # per swept value: the largest Lyapunov exponent over the same window
+            "values": np.asarray(bif.values, dtype=float), "lyapunov": bif.lyapunov,
             # 1, 2: a work limit stopped the run; 3 only means more impacts than kept
             "partial": int(np.count_nonzero((status != 0) & (status != 3)))}
 
 
 def merged(parts: list[dict]) -> dict:
     """Several chunks as one (``drawn`` indices shifted to the joined arrays)."""
-    out = {c: np.concatenate([p[c] for p in parts]) for c in ("omega", "v", "t", "phase")}
+    out = {c: np.concatenate([p[c] for p in parts])
+           for c in ("omega", "v", "t", "phase", "values", "lyapunov")}
     offsets = np.cumsum([0] + [p["omega"].size for p in parts[:-1]])
     out["drawn"] = np.concatenate([p["drawn"] + o for p, o in zip(parts, offsets)])
     return out

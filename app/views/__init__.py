@@ -8,12 +8,13 @@ from .base import View
 from .bifurcation import BifurcationView
 from .displacement import DisplacementView
 from .impact_map import ImpactMapView
+from .lyapunov import LyapunovView
 from .phase import PhaseView
 from .poincare import PoincareView
 
 #: The views of a page, in page order.
 VIEWS: tuple[type[View], ...] = (DisplacementView, PhaseView, ImpactMapView, PoincareView,
-                                 BifurcationView)
+                                 BifurcationView, LyapunovView)
 
-__all__ = ["VIEWS", "BifurcationView", "DisplacementView", "ImpactMapView", "PhaseView",
-           "PoincareView", "View"]
+__all__ = ["VIEWS", "BifurcationView", "DisplacementView", "ImpactMapView", "LyapunovView",
+           "PhaseView", "PoincareView", "View"]

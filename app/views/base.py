@@ -14,6 +14,10 @@ class View:
 
     figure = None
 
+    def link(self, views: dict) -> None:
+        """Once every view of the page exists (``views`` by key): share a range with, or
+        draw into, another view's figure."""
+
     def show_scene(self, scene) -> None:
         """A new trajectory (``app.compute.SceneData``: run, trajectory, impacts)."""
 

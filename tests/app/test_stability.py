@@ -129,3 +129,40 @@ def test_bad_settings_keep_the_last_readout(make_explorer):
 @pytest.mark.parametrize("x,n", [(np.array([1.0, 2.0] * 5), 2), (np.arange(10.0), 0)])
 def test_repeat_period(x, n):
     assert stability.repeat_period(x, x) == n
+
+
+def test_strip_is_aligned_with_the_diagram_and_shares_its_x_axis(make_explorer):
+    e = make_explorer(bif_min="1", bif_max="3", bif_n="41")
+    strip = e.lyapunov.source.data
+    values = np.linspace(1.0, 3.0, 41)
+    assert np.array_equal(strip["omega"], values)            # one row per swept value
+    assert set(np.unique(e.bifurcation.source.data["omega"])) <= set(values)
+    assert e.lyapunov.figure.x_range is e.bifurcation.figure.x_range
+    # at omega = 2 the strip's exponent is ln|mu1| / T of the closed-form orbit; the
+    # diagram's window is 250 time units, where the two close multipliers (0.690, 0.677)
+    # leave a finite-window bias of a few 1e-4 (the core's 1e-3 test uses 4500)
+    p = il.Params()
+    t1, u = period_one_orbit(p, [2.0, -0.5])
+    x, v = flight(p, t1, p.g, -p.r * u, p.T)
+    h = 1e-6
+    J = np.column_stack([(one_period_map(p, x + h * (j == 0), v + h * (j == 1), t1)
+                          - one_period_map(p, x - h * (j == 0), v - h * (j == 1), t1)) / (2 * h)
+                         for j in range(2)])
+    mu1 = np.max(np.abs(np.linalg.eigvals(J)))
+    lam = np.asarray(strip["lyapunov"])
+    assert abs(lam[20] - math.log(mu1) / p.T) < 2e-3
+    # the chaos band of Fig. 6 (omega = 2.8, independently chaotic by the readout test)
+    assert lam[np.argmin(np.abs(values - 2.8))] > 0
+
+
+def test_strip_draws_sticking_and_undefined_values_at_the_bottom(make_explorer):
+    e = make_explorer(bif_min="0.1", bif_max="0.6", bif_n="12")
+    d = e.lyapunov.source.data
+    lam, y = np.asarray(d["lyapunov"]), np.asarray(d["y"])
+    sticks = lam == -np.inf
+    assert sticks.any() and len(lam) == 12                     # nothing dropped
+    lo, hi = e.lyapunov.figure.y_range.start, e.lyapunov.figure.y_range.end
+    assert np.all((y[sticks] > lo) & (y[sticks] < lo + 0.1 * (hi - lo)))
+    assert {d["marker"][i] for i in np.flatnonzero(sticks)} == {"inverted_triangle"}
+    assert np.all(y[np.isfinite(lam)] == lam[np.isfinite(lam)])
+    assert f"{int(sticks.sum())} sticking" in e.lyapunov.figure.title.text

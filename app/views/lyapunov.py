@@ -1,0 +1,89 @@
+"""View 6: the largest Lyapunov exponent along the diagram's sweep, under the diagram and
+sharing its x axis (the same ``x_range`` object), filled in with the diagram's chunks.
+
+λ₁ > 0 marks chaos (a band of positive points), λ₁ < 0 a periodic attractor. A motion
+that sticks to the wall has λ₁ = −∞ and one whose exponent is undefined (unbounded
+growth, or a run stopped at a work limit) NaN: both are drawn at the bottom edge, as a
+downward triangle and a cross, and counted in the title, never dropped.
+"""
+from __future__ import annotations
+
+import numpy as np
+from bokeh.models import ColumnDataSource, Range1d, Span
+
+from ..state import Run
+from ._figure import LINE, WALL, make_figure, padded, set_range
+from .base import View
+
+STICKS = ("inverted_triangle", "#7a5195")   # λ₁ = −∞: off the bottom
+UNDEFINED = ("x", "#b35900")          # λ₁ NaN
+FINITE = ("circle", LINE)
+#: Few tools (few Bokeh models): the x axis is the diagram's, zoomed there or here.
+TOOLS = "xpan,xwheel_zoom,reset"
+#: The y axis spans at least this much around 0, so that a strip of periodic motion
+#: (λ₁ ≈ −0.1) does not blow noise up.
+MIN_SPAN = 0.1
+
+
+def _empty() -> dict:
+    return {"omega": np.zeros(0), "lyapunov": np.zeros(0), "y": np.zeros(0),
+            "marker": [], "color": []}
+
+
+def strip_columns(values: np.ndarray, lam: np.ndarray) -> tuple[dict, tuple]:
+    """Columns of the strip (sorted by the swept value) and its y range: finite values
+    as they are, -inf and NaN at the bottom edge with their own marker."""
+    order = np.argsort(values, kind="stable")
+    x, lam = values[order], lam[order]
+    finite = np.isfinite(lam)
+    lo, hi = padded(lam[finite], include=(-MIN_SPAN / 2, MIN_SPAN / 2))
+    bottom = lo + 0.03 * (hi - lo)
+    y = np.where(finite, lam, bottom)
+    sticks = lam == -np.inf
+    marker = np.where(finite, FINITE[0], np.where(sticks, STICKS[0], UNDEFINED[0]))
+    color = np.where(finite, FINITE[1], np.where(sticks, STICKS[1], UNDEFINED[1]))
+    return ({"omega": x, "lyapunov": lam, "y": y, "marker": marker.tolist(),
+             "color": color.tolist()}, (lo, hi))
+
+
+class LyapunovView(View):
+    key = "lyapunov"
+    wide = True
+
+    def __init__(self):
+        self.source = ColumnDataSource(_empty())
+        self.values: list[np.ndarray] = []
+        self.exponents: list[np.ndarray] = []
+        self.figure = make_figure("lyapunov_figure", "Largest Lyapunov exponent λ₁",
+                                  "driving frequency ω (rad/s)", "λ₁ (1/s)", height=190,
+                                  y_range=Range1d(-MIN_SPAN, MIN_SPAN), tools=TOOLS)
+        self.figure.add_layout(Span(location=0.0, dimension="width", line_color=WALL,
+                                    line_width=1, name="lyapunov_zero"))
+        self.figure.scatter("omega", "y", source=self.source, size=3, marker="marker",
+                            color="color", name="lyapunov")
+
+    def link(self, views: dict) -> None:
+        """Share the diagram's x axis: zooming or panning one moves both."""
+        self.figure.x_range = views["bifurcation"].figure.x_range
+
+    def diagram_started(self, run: Run) -> None:
+        self.values, self.exponents = [], []
+        self.source.data = _empty()
+        self.figure.title.text = "Largest Lyapunov exponent λ₁ — computing"
+
+    def diagram_chunk(self, part: dict) -> None:
+        """All values so far in one assignment (the bottom edge moves with the data)."""
+        self.values.append(part["values"])
+        self.exponents.append(part["lyapunov"])
+        values, lam = np.concatenate(self.values), np.concatenate(self.exponents)
+        data, (lo, hi) = strip_columns(values, lam)
+        self.source.data = data
+        set_range(self.figure.y_range, lo, hi)
+        n = lam.size
+        chaos = int(np.count_nonzero(lam > 0))
+        sticks = int(np.count_nonzero(lam == -np.inf))
+        undefined = int(np.count_nonzero(np.isnan(lam)))
+        self.figure.title.text = (
+            f"Largest Lyapunov exponent λ₁ over the diagram's window — {n} values: {chaos} "
+            f"with λ₁ > 0 (chaos), {sticks} sticking (λ₁ = −∞, ▼ at the bottom), "
+            f"{undefined} undefined (×)")

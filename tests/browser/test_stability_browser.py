@@ -1,0 +1,44 @@
+"""The stability readout, the Lyapunov strip and the branch overlay in headless Chromium.
+
+Data are read from the page's Bokeh document by renderer name (see test_app_browser)."""
+import time
+
+from test_app_browser import JS, RESULTS, text
+
+STRIP_READY = """() => {
+  if (!(window.Bokeh && Bokeh.documents.length)) return false;
+  const doc = Bokeh.documents[0];
+  const bif = doc.get_model_by_name('bifurcation_figure');
+  const strip = doc.get_model_by_name('lyapunov');
+  const readout = doc.get_model_by_name('stability_readout');
+  return !!(bif && strip && readout) && bif.title.text.includes('complete')
+    && strip.data_source.data.omega.length > 0 && !readout.text.includes('computing');
+}"""
+
+
+def open_page(page, server, query=""):
+    page.goto(server.url + query)
+    page.wait_for_function(STRIP_READY, timeout=60_000, polling=200)
+    page.evaluate(JS)
+
+
+def test_readout_and_strip_at_paper_defaults(page, server):
+    open_page(page, server)
+    readout = text(page, "ie-stability")
+    assert "1-impact period-1" in readout and "stable" in readout, readout
+    data = page.evaluate("""() => { const d = ie.data('lyapunov');
+        return {n: d.omega.length, lam: Array.from(d.lyapunov), omega: Array.from(d.omega)}; }""")
+    assert data["n"] == 400                       # one point per swept value
+    assert any(v > 0 for v in data["lam"])        # the chaos bands of the paper's Fig. 3
+    shared = page.evaluate("ie.model('lyapunov_figure').x_range.id === "
+                           "ie.model('bifurcation_figure').x_range.id")
+    assert shared
+    assert page.evaluate("ie.model('lyapunov_zero').location") == 0
+
+
+def test_server_log_has_no_traceback(server):
+    time.sleep(0.5)
+    log = server.log.read_text(errors="replace")
+    assert "Traceback" not in log, log[-3000:]
+    assert " ERROR " not in log and "Exception" not in log, log[-3000:]
+    RESULTS.mkdir(exist_ok=True)
