@@ -18,7 +18,7 @@ from concurrent.futures import ThreadPoolExecutor
 
 import panel as pn
 
-from . import accuracy, compute, diagram, stability, state
+from . import accuracy, branches, compute, diagram, stability, state
 from .controls import Controls
 from .downloads import Downloads
 from .jobs import Job, session_dispatcher, session_doc
@@ -32,6 +32,7 @@ log = logging.getLogger(__name__)
 _SCENE_POOL = ThreadPoolExecutor(max_workers=2, thread_name_prefix="impact-scene")
 _ACCURACY_POOL = ThreadPoolExecutor(max_workers=1, thread_name_prefix="impact-accuracy")
 _STABILITY_POOL = ThreadPoolExecutor(max_workers=1, thread_name_prefix="impact-stability")
+_BRANCH_POOL = ThreadPoolExecutor(max_workers=1, thread_name_prefix="impact-branches")
 
 
 class Explorer(pn.viewable.Viewer):
@@ -71,6 +72,12 @@ class Explorer(pn.viewable.Viewer):
         self.stability_job = Job("stability", lambda run, t: stability.readout(run), dispatch,
                                  pool=None if doc is None else _STABILITY_POOL,
                                  on_result=self._stability_done)
+        self._parts: list[dict] = []      # the diagram's chunks so far (branch seeds)
+        self._diagram_end = None          # "complete", "partial (time limit)", "failed"
+        self.branch_job = Job("branches",
+                              lambda req, t: branches.branches_for(req[0], req[1], t),
+                              dispatch, pool=None if doc is None else _BRANCH_POOL,
+                              on_result=self._branches_done)
         self.settings.param.watch(self._on_settings, list(QUERY_NAMES))
         self._apply()
         if errors:
@@ -93,7 +100,8 @@ class Explorer(pn.viewable.Viewer):
 
     def _on_session_destroyed(self, session_context) -> None:
         """The tab is gone: stop its jobs and let the whole session be collected."""
-        for job in (self.scene_job, self.runner, self.accuracy_job, self.stability_job):
+        for job in (self.scene_job, self.runner, self.accuracy_job, self.stability_job,
+                    self.branch_job):
             job.cancel()
         self.release_links()
 
@@ -132,7 +140,9 @@ class Explorer(pn.viewable.Viewer):
                                     != stability.readout_key(self._wanted)):
             self.controls.show_stability(None)
             self.stability_job.submit(run)
-        self._wanted = run
+        previous, self._wanted = self._wanted, run
+        if previous is None or run.branches != previous.branches:
+            self._update_branches()
         self.scene_job.submit(run)
 
     def _on_load(self) -> None:
@@ -143,11 +153,33 @@ class Explorer(pn.viewable.Viewer):
 
     def _restart_diagram(self, run) -> None:
         self._diagram_run, self._drawn, self._recorded = run, 0, 0
+        self._parts, self._diagram_end = [], None
+        if run.branches:
+            self.branch_job.cancel()
+            for view in self.views:
+                view.show_branches("waiting for the diagram")
         for view in self.views:
             view.diagram_started(run)
         self.controls.show_diagram(f"computing {run.bif_n} ω values…", 0)
         if self._loaded:
             self.runner.submit(run)
+
+    def _update_branches(self) -> None:
+        """Branch overlay: off, waiting for the diagram, or computed from its chunks."""
+        run = self._wanted
+        if not run.branches:
+            self.branch_job.cancel()
+            for view in self.views:
+                view.show_branches(None)
+            return
+        ready = self._diagram_end not in (None, "failed") and self._parts
+        text = ("continuing the orbits the diagram found…" if ready else
+                "waiting for the diagram" if self._diagram_end is None else
+                "no diagram to start from")
+        for view in self.views:
+            view.show_branches(text)
+        if ready:
+            self.branch_job.submit((self._diagram_run, diagram.merged(self._parts)))
 
     def _follow_diagram(self, run, ticket) -> None:
         diagram.follow(run, ticket, self._on_chunk, self._on_done, self._on_diagram_error)
@@ -187,6 +219,7 @@ class Explorer(pn.viewable.Viewer):
         self._write_url()
 
     def _on_chunk(self, part: dict, done: int, total: int) -> None:
+        self._parts.append(part)
         self._drawn += len(part["drawn"])
         self._recorded += len(part["omega"])
         for view in self.views:
@@ -198,11 +231,17 @@ class Explorer(pn.viewable.Viewer):
         self.controls.show_diagram(text, info["done"], info["total"])
         for view in self.views:
             view.diagram_finished(end)
+        self._diagram_end = end
+        if self._wanted.branches:
+            self._update_branches()
 
     def _on_diagram_error(self, text: str) -> None:
         self.controls.show_diagram(f"diagram failed: {text}")
         for view in self.views:
             view.diagram_finished("failed")
+        self._diagram_end = "failed"
+        if self._wanted.branches:
+            self._update_branches()
 
     def _accuracy_done(self, run, result) -> None:
         if isinstance(result, Exception):
@@ -215,6 +254,13 @@ class Explorer(pn.viewable.Viewer):
             result = stability.Readout("failed", f"no readout: {type(result).__name__}")
         self.readout = result
         self.controls.show_stability(stability.to_html(result))
+
+    def _branches_done(self, request, result) -> None:
+        if isinstance(result, Exception):     # never raise into Panel
+            log.warning("branches failed: %s: %s", type(result).__name__, result)
+            result = f"failed: {type(result).__name__}: {result}"
+        for view in self.views:
+            view.show_branches(result)
 
     def _mark_caption(self) -> None:
         if self._scene_run is not None and self.run is not None:

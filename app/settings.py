@@ -7,6 +7,9 @@ help text, the widget that edits it, and which results depend on it:
 - ``section``: the Poincaré map only;
 - ``diagram``: the bifurcation diagram.
 
+A setting that affects none of them switches an extra result on or off (``branches``:
+the branch overlay, computed from the finished diagram; a ``flag``, 1 or 0 in the URL).
+
 Derived here: the ``Settings`` class (one ``param.Parameterized`` holding what the user
 typed, valid or not), ``QUERY_NAMES``, ``SCENE_FIELDS``, ``SECTION_FIELDS``,
 ``DIAGRAM_FIELDS``, and the method options passed to ``impactlib.simulate``
@@ -140,6 +143,10 @@ SETTINGS: tuple[Setting, ...] = (
     Setting("bif_n", "diagram values", 400,
             f"Number of ω values in the diagram (2 … {BIF_N_MAX}).", frozenset({DIAGRAM}),
             "Bifurcation diagram range", kind="integer", lo=2, hi=BIF_N_MAX),
+    Setting("branches", "periodic branches on the diagram", False,
+            "Continue the periodic orbits the diagram finds over its range: stable parts "
+            "solid, unstable dashed, bifurcations and grazings marked (URL: branches=1).",
+            frozenset(), "Bifurcation diagram range", widget="checkbox", kind="flag"),
 )
 
 BY_NAME = {s.name: s for s in SETTINGS}

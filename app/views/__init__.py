@@ -6,6 +6,7 @@ list it in ``VIEWS`` below; the session builds it, lays it out and feeds it.
 """
 from .base import View
 from .bifurcation import BifurcationView
+from .branches import BranchesView
 from .displacement import DisplacementView
 from .impact_map import ImpactMapView
 from .lyapunov import LyapunovView
@@ -14,7 +15,7 @@ from .poincare import PoincareView
 
 #: The views of a page, in page order.
 VIEWS: tuple[type[View], ...] = (DisplacementView, PhaseView, ImpactMapView, PoincareView,
-                                 BifurcationView, LyapunovView)
+                                 BifurcationView, LyapunovView, BranchesView)
 
-__all__ = ["VIEWS", "BifurcationView", "DisplacementView", "ImpactMapView", "LyapunovView",
-           "PhaseView", "PoincareView", "View"]
+__all__ = ["VIEWS", "BifurcationView", "BranchesView", "DisplacementView", "ImpactMapView",
+           "LyapunovView", "PhaseView", "PoincareView", "View"]

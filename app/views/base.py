@@ -30,5 +30,9 @@ class View:
     def diagram_chunk(self, part: dict) -> None:
         """More of the diagram (columns omega, v, t, phase; ``drawn`` rows to plot)."""
 
+    def show_branches(self, branches) -> None:
+        """Periodic branches over the diagram's range (``app.branches.BranchSet``); a str
+        says why there are none yet (computing, no diagram); None: switched off."""
+
     def diagram_finished(self, text: str) -> None:
         """The diagram ended: "complete", "partial (time limit)" or "failed"."""

@@ -27,7 +27,7 @@ MIN_SPAN = 0.1
 
 def _empty() -> dict:
     return {"omega": np.zeros(0), "lyapunov": np.zeros(0), "y": np.zeros(0),
-            "marker": [], "color": []}
+            "marker": [], "color": [], "size": np.zeros(0)}
 
 
 def strip_columns(values: np.ndarray, lam: np.ndarray) -> tuple[dict, tuple]:
@@ -43,7 +43,7 @@ def strip_columns(values: np.ndarray, lam: np.ndarray) -> tuple[dict, tuple]:
     marker = np.where(finite, FINITE[0], np.where(sticks, STICKS[0], UNDEFINED[0]))
     color = np.where(finite, FINITE[1], np.where(sticks, STICKS[1], UNDEFINED[1]))
     return ({"omega": x, "lyapunov": lam, "y": y, "marker": marker.tolist(),
-             "color": color.tolist()}, (lo, hi))
+             "color": color.tolist(), "size": np.where(finite, 3.0, 7.0)}, (lo, hi))
 
 
 class LyapunovView(View):
@@ -59,7 +59,7 @@ class LyapunovView(View):
                                   y_range=Range1d(-MIN_SPAN, MIN_SPAN), tools=TOOLS)
         self.figure.add_layout(Span(location=0.0, dimension="width", line_color=WALL,
                                     line_width=1, name="lyapunov_zero"))
-        self.figure.scatter("omega", "y", source=self.source, size=3, marker="marker",
+        self.figure.scatter("omega", "y", source=self.source, size="size", marker="marker",
                             color="color", name="lyapunov")
 
     def link(self, views: dict) -> None:
@@ -84,6 +84,5 @@ class LyapunovView(View):
         sticks = int(np.count_nonzero(lam == -np.inf))
         undefined = int(np.count_nonzero(np.isnan(lam)))
         self.figure.title.text = (
-            f"Largest Lyapunov exponent λ₁ over the diagram's window — {n} values: {chaos} "
-            f"with λ₁ > 0 (chaos), {sticks} sticking (λ₁ = −∞, ▼ at the bottom), "
-            f"{undefined} undefined (×)")
+            f"Largest Lyapunov exponent λ₁: {chaos} of {n} values > 0 (chaos) · {sticks} "
+            f"stick (−∞, ▼ at the bottom) · {undefined} undefined (×)")

@@ -165,4 +165,65 @@ def test_strip_draws_sticking_and_undefined_values_at_the_bottom(make_explorer):
     assert np.all((y[sticks] > lo) & (y[sticks] < lo + 0.1 * (hi - lo)))
     assert {d["marker"][i] for i in np.flatnonzero(sticks)} == {"inverted_triangle"}
     assert np.all(y[np.isfinite(lam)] == lam[np.isfinite(lam)])
-    assert f"{int(sticks.sum())} sticking" in e.lyapunov.figure.title.text
+    assert f"{int(sticks.sum())} stick (−∞" in e.lyapunov.figure.title.text
+
+
+def multiplier_min(p, guess):
+    """The most negative eigenvalue of the closed-form one-period map's Jacobian at the
+    period-1 orbit (central differences, h = 1e-6)."""
+    t1, u = period_one_orbit(p, guess)
+    x, v = flight(p, t1, p.g, -p.r * u, p.T)
+    h = 1e-6
+    J = np.column_stack([(one_period_map(p, x + h * (j == 0), v + h * (j == 1), t1)
+                          - one_period_map(p, x - h * (j == 0), v - h * (j == 1), t1)) / (2 * h)
+                         for j in range(2)])
+    return np.min(np.real(np.linalg.eigvals(J))), u
+
+
+def test_branches_from_the_url_locate_the_period_doubling_of_fig3d(make_explorer):
+    e = make_explorer(r="0.6", branches="1", bif_min="1.5", bif_max="3.5", bif_n="40")
+    assert e.settings.branches is True and e.run.branches is True
+    from app import state
+    assert state.to_query(e.run)["branches"] == "1"
+    b = e.branches
+    assert len(b.stable.data["xs"]) > 0 and len(b.unstable.data["xs"]) > 0
+    assert len(b.events.data["x"]) > 0 and all(r.visible for r in b.renderers)
+    # the period-1 branch loses stability where a closed-form multiplier crosses -1
+    p = il.Params(r=0.6)
+    lo, hi = 2.66, 2.68
+    assert multiplier_min(p.replace(omega=lo), [2.0, -0.5])[0] > -1
+    assert multiplier_min(p.replace(omega=hi), [2.0, -0.5])[0] < -1
+    pd = [x for x, t in zip(b.events.data["x"], b.events.data["text"]) if t.startswith("PD")]
+    assert any(lo < x < hi for x in pd), pd
+    # the stable line through omega = 2 is the closed-form orbit's impact velocity (to the
+    # linear interpolation between continuation points, a few 1e-4 at these steps)
+    _, u = multiplier_min(p.replace(omega=2.0), [2.0, -0.5])
+    at2 = []
+    for xs, ys in zip(b.stable.data["xs"], b.stable.data["ys"]):
+        if np.all(np.diff(xs) < 0):
+            xs, ys = xs[::-1], ys[::-1]
+        if min(xs) <= 2.0 <= max(xs) and np.all(np.diff(xs) > 0):
+            at2.append(np.interp(2.0, xs, ys))
+    assert any(abs(y - u) < 2e-3 for y in at2), (at2, u)
+
+
+def test_branch_overlay_is_built_on_request_and_switched_off(make_explorer):
+    e = make_explorer()
+    names = {r.name for r in e.bifurcation.figure.renderers}
+    assert not names & {"branches_stable", "branches_unstable", "branch_events"}
+    e.settings.branches = True
+    assert e.runner.done.wait(60) and e.branch_job.done.wait(120)
+    names = {r.name for r in e.bifurcation.figure.renderers}
+    assert {"branches_stable", "branches_unstable", "branch_events"} <= names
+    shown = e.branches.stable.data["xs"]
+    assert len(shown) > 0
+    e.settings.branches = False
+    assert not any(r.visible for r in e.branches.renderers)
+    assert len(e.branches.stable.data["xs"]) == 0
+    e.settings.branches = True                   # from the cache: the same lines at once
+    assert len(e.branches.stable.data["xs"]) == len(shown)
+
+
+def test_branch_flag_in_the_url_must_be_on_or_off(make_explorer):
+    e = make_explorer(branches="maybe")
+    assert "branches" in e.message and e.settings.branches is False

@@ -3,6 +3,7 @@
 Data are read from the page's Bokeh document by renderer name (see test_app_browser)."""
 import time
 
+import pytest
 from test_app_browser import JS, RESULTS, text
 
 STRIP_READY = """() => {
@@ -34,6 +35,34 @@ def test_readout_and_strip_at_paper_defaults(page, server):
                            "ie.model('bifurcation_figure').x_range.id")
     assert shared
     assert page.evaluate("ie.model('lyapunov_zero').location") == 0
+
+
+BRANCHES_READY = """() => {
+  const doc = Bokeh.documents[0];
+  const r = doc.get_model_by_name('branches_stable');
+  return !!r && r.data_source.data.xs.length > 0;
+}"""
+
+
+@pytest.mark.parametrize("query", ["?branches=1", "?r=0.6&branches=1"])
+def test_branch_overlay_from_the_url(page, server, query):
+    open_page(page, server, query)
+    page.wait_for_function(BRANCHES_READY, timeout=90_000, polling=200)
+    counts = page.evaluate("""() => ({
+        stable: ie.data('branches_stable').xs.length,
+        unstable: ie.data('branches_unstable').xs.length,
+        events: ie.data('branch_events').x.length,
+        labels: ie.data('branch_events').text.filter((t) => t).join(' '),
+        lyapunov: ie.len('lyapunov') })""")
+    assert counts["stable"] > 0 and counts["unstable"] > 0 and counts["events"] > 0, counts
+    assert "PD" in counts["labels"] and counts["lyapunov"] == 400, counts
+    assert page.locator(".ie-w-branches input").first.is_checked()
+    page.set_viewport_size({"width": 1280, "height": 720})
+    page.evaluate("() => window.scrollTo(0, document.body.scrollHeight)")
+    page.wait_for_timeout(500)
+    RESULTS.mkdir(exist_ok=True)
+    name = "stability-r06.png" if "r=0.6" in query else "stability.png"
+    page.screenshot(path=str(RESULTS / name))
 
 
 def test_server_log_has_no_traceback(server):
