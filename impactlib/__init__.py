@@ -2,6 +2,7 @@
 
     m x'' + 2 c x' + k x = cos(omega t)   for x > g;   x'(t+) = -r x'(t-) at x = g
 """
+from .basins import Attractor, BasinRows, Basins, basins, iter_basins
 from .classify import Motion, classify
 from .model import FIELDS, METHODS, PARAM_NAMES, Params, RunLimits, rk4_stability_limit
 from .simulate import Impacts, Samples, Solution, simulate
@@ -10,4 +11,5 @@ from .warmup import warmup
 
 __all__ = ["FIELDS", "METHODS", "PARAM_NAMES", "Params", "RunLimits", "rk4_stability_limit",
            "Impacts", "Samples", "Solution", "simulate", "Motion", "classify",
-           "Bifurcation", "RegimeMap", "bifurcation", "iter_bifurcation", "regime_map", "warmup"]
+           "Bifurcation", "RegimeMap", "bifurcation", "iter_bifurcation", "regime_map", "warmup",
+           "Attractor", "BasinRows", "Basins", "basins", "iter_basins"]
