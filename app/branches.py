@@ -63,10 +63,11 @@ class BranchSet:
 
 def seeds(values: np.ndarray, lam: np.ndarray, rows: np.ndarray, drawn_rows: np.ndarray,
           max_seeds: int = MAX_SEEDS) -> list[float]:
-    """Seed values from a diagram: ``values`` and ``lam`` per swept value, ``rows`` the
-    value of each recorded impact and ``drawn_rows`` the indices of distinct ones."""
-    order = np.argsort(values, kind="stable")
-    values, lam = values[order], lam[order]
+    """Seed values from a diagram: ``values`` and ``lam`` per swept value (and chain),
+    ``rows`` the value of each recorded impact and ``drawn_rows`` the indices of the
+    distinct ones."""
+    values, first = np.unique(values, return_index=True)    # one chain of "both"
+    lam = lam[first]
     shown = rows[drawn_rows]
     counts = np.array([np.count_nonzero(shown == w) for w in values])
     periodic = np.isfinite(lam) & (lam < 0) & (counts > 0)
@@ -98,10 +99,11 @@ def on_branch(branches, orb, name: str, value: float) -> bool:
     return False
 
 
-def compute(run: Run, seed_values: list[float], live=lambda: True,
-            name: str = "omega") -> BranchSet:
-    """Continue the orbits found at ``seed_values`` over [run.bif_min, run.bif_max]."""
+def compute(run: Run, seed_values: list[float], live=lambda: True) -> BranchSet:
+    """Continue the orbits found at ``seed_values`` of the swept parameter
+    ``run.bif_param`` over [run.bif_min, run.bif_max]."""
     tic = time.perf_counter()
+    name = run.bif_param
     lo, hi = run.bif_min, run.bif_max
     found: list = []
     done = 0

@@ -13,7 +13,7 @@ import param
 
 from .panel_fixes import PromptFloatSlider
 from .scenes import SCENES
-from .settings import SETTINGS
+from .settings import RESEARCH, SETTINGS
 
 SIDEBAR_WIDTH = 310
 STATUS_NAME = "bifurcation_status"
@@ -130,7 +130,7 @@ class Controls:
 
     def _layout(self, views, downloads):
         card = dict(sizing_mode="stretch_width")
-        groups = list(dict.fromkeys(s.group for s in SETTINGS))
+        groups = [g for g in dict.fromkeys(s.group for s in SETTINGS) if g != RESEARCH]
         cards = [pn.layout.Card(*self._group(g), title=g, **card,
                                 **({"collapsible": False} if i < 2 else {"collapsed": True}))
                  for i, g in enumerate(groups)]

@@ -52,4 +52,13 @@ class Downloads:
 
     def bifurcation_csv(self) -> io.StringIO:
         self._name(2, "bifurcation")
-        return to_csv(self.session.bifurcation.table())
+        view = self.session.bifurcation
+        table = view.table()
+        run = view.run
+        # the value column is named after the swept parameter; direction only when
+        # the sweep has one (+1 up, -1 down)
+        cols = {run.bif_param if run is not None else "omega": table["omega"]}
+        cols.update((c, table[c]) for c in ("v", "t", "phase"))
+        if run is not None and run.bif_sweep != "independent":
+            cols["direction"] = table["direction"]
+        return to_csv(cols)

@@ -24,7 +24,7 @@ from .downloads import Downloads
 from .jobs import Job, session_dispatcher, session_doc
 from .panel_fixes import release_links
 from .scenes import BY_KEY
-from .settings import QUERY_NAMES, Settings
+from .settings import QUERY_NAMES, SYMBOLS, Settings
 from .views import VIEWS
 
 log = logging.getLogger(__name__)
@@ -53,6 +53,7 @@ class Explorer(pn.viewable.Viewer):
         self.views = [cls() for cls in VIEWS]
         for view in self.views:
             setattr(self, view.key, view)
+            view.connect(self.pick)
         for view in self.views:
             view.link({v.key: v for v in self.views})
         self.downloads = Downloads(self)
@@ -118,9 +119,20 @@ class Explorer(pn.viewable.Viewer):
         self._scene_run = self._wanted
         self._mark_caption()
 
+    def pick(self, **values) -> None:
+        """Settings chosen by a gesture on a view (a tap on the diagram, the map...)."""
+        self.settings.param.update(**values)
+
     def _on_settings(self, *events) -> None:
         if not self._restoring:
             self._keep_message = False
+        changed = {e.name for e in events}
+        st = self.settings
+        if ("bif_param" in changed and not changed & {"bif_min", "bif_max"}
+                and (st.bif_min, st.bif_max) != (None, None)):
+            # another parameter: its own default range (the nested update applies it)
+            self.settings.param.update(bif_min=None, bif_max=None)
+            return
         try:
             with pn.io.hold(self._doc):   # one websocket message for all view updates
                 self._apply()
@@ -160,7 +172,7 @@ class Explorer(pn.viewable.Viewer):
                 view.show_branches("waiting for the diagram")
         for view in self.views:
             view.diagram_started(run)
-        self.controls.show_diagram(f"computing {run.bif_n} ω values…", 0)
+        self.controls.show_diagram(f"computing {diagram.what(run)}…", 0)
         if self._loaded:
             self.runner.submit(run)
 
@@ -224,7 +236,8 @@ class Explorer(pn.viewable.Viewer):
         self._recorded += len(part["omega"])
         for view in self.views:
             view.diagram_chunk(part)
-        self.controls.show_diagram(f"computing… {done}/{total} ω values", done, total)
+        self.controls.show_diagram(f"computing… {done}/{total} "
+                                   f"{SYMBOLS[self._diagram_run.bif_param]} values", done, total)
 
     def _on_done(self, info: dict) -> None:
         text, end = diagram.status_text(self._diagram_run, info, self._recorded, self._drawn)

@@ -2,6 +2,7 @@
 
     m x'' + 2 c x' + k x = cos(omega t)   for x > g;   x'(t+) = -r x'(t-) at x = g
 """
+from .basins import Attractor, BasinRows, Basins, basins, iter_basins
 from .classify import Motion, classify
 from .continuation import Branch, Event, continuation
 from .lyapunov import Lyapunov, lyapunov
@@ -15,4 +16,5 @@ __all__ = ["FIELDS", "METHODS", "PARAM_NAMES", "Params", "RunLimits", "rk4_stabi
            "Impacts", "Samples", "Solution", "simulate", "Motion", "classify",
            "Bifurcation", "RegimeMap", "bifurcation", "iter_bifurcation", "regime_map", "warmup",
            "PeriodicOrbit", "periodic_orbit", "Lyapunov", "lyapunov",
-           "Branch", "Event", "continuation"]
+           "Branch", "Event", "continuation",
+           "Attractor", "BasinRows", "Basins", "basins", "iter_basins"]

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 
 def warmup() -> None:
+    from .basins import basins
     from .classify import classify
     from .model import Params
     from .simulate import simulate
@@ -16,3 +17,4 @@ def warmup() -> None:
     bifurcation(p, "omega", [1.0, 2.0], t_end=20.0, t_record=10.0, workers=1)
     bifurcation(p, "omega", [1.0, 2.0], t_end=20.0, t_record=10.0, warm_start="up", workers=1)
     regime_map(p, "omega", [1.0, 2.0], "r", [0.5, 0.8], t_end=20.0, t_record=10.0, workers=1)
+    basins(p, (0.0, 0.5), (-0.5, 0.5), n=(2, 2), workers=1)

@@ -36,3 +36,6 @@ class View:
 
     def diagram_finished(self, text: str) -> None:
         """The diagram ended: "complete", "partial (time limit)" or "failed"."""
+
+    def connect(self, pick) -> None:
+        """Gestures on the view may change settings through ``pick(**settings)``."""
