@@ -35,6 +35,10 @@ REPEAT_RTOL = 1e-6
 MAX_PERIOD = 16
 #: Newton may move the point this far (relative) and still be the orbit the motion is on.
 SAME_ORBIT_RTOL = 1e-4
+#: Short words for il.classify's kinds (its full label is on the motion badge).
+VERDICTS = {"chaotic": "chaotic: λ₁ is positive by more than twice its error",
+            "undetermined": "undetermined: λ₁ is not beyond twice its error from 0 — "
+                            "lengthen the window"}
 
 
 @dataclass(frozen=True)
@@ -117,7 +121,7 @@ def _stability_readout(key: tuple) -> Readout:
     window = sol.t_end - sol.t_record
     budget = il.RunLimits(max_impacts=2 * sol.n_impacts + 1000, max_steps=2 * sol.nsteps + 10000)
     ly = lyapunov_from(p, tf, xf, vf, tf + window, tf, limits=budget)
-    verdict = motion.label
+    verdict = VERDICTS.get(motion.kind, motion.label)
     if ly.sticks and "sticks" not in verdict:
         verdict += " — the motion sticks to the wall: its Jacobian vanishes, exponents −∞"
     return Readout("exponents", verdict, lyapunov=ly)
