@@ -16,6 +16,7 @@ complete results are kept for all sessions (LRU by ``Run.diagram_key()``).
 """
 from __future__ import annotations
 
+import logging
 import math
 import threading
 import time
@@ -28,6 +29,8 @@ import impactlib as il
 
 from .stability import settled_orbit
 from .state import Run
+
+log = logging.getLogger(__name__)
 
 MAX_SEEDS = 8
 MAX_POINTS = 300
@@ -99,6 +102,16 @@ def on_branch(branches, orb, name: str, value: float) -> bool:
     return False
 
 
+def _follow(p, name, stop, n, x0, v0, max_points):
+    """il.continuation, or None where the core refuses the start (e.g. a stop outside
+    the parameter's valid range): one branch less, not a failed overlay."""
+    try:
+        return il.continuation(p, name, stop, n=n, x0=x0, v0=v0, max_points=max_points)
+    except ValueError as exc:
+        log.info("branch from %s = %g not continued: %s", name, getattr(p, name), exc)
+        return None
+
+
 def compute(run: Run, seed_values: list[float], live=lambda: True) -> BranchSet:
     """Continue the orbits found at ``seed_values`` of the swept parameter
     ``run.bif_param`` over [run.bif_min, run.bif_max]."""
@@ -116,9 +129,10 @@ def compute(run: Run, seed_values: list[float], live=lambda: True) -> BranchSet:
         if (orb is None or orb.sticks or not 0 < orb.impacts < math.inf
                 or on_branch(found, orb, name, w)):
             continue
-        new = [il.continuation(p, name, stop, n=orb.n, x0=orb.x, v0=orb.v,
-                               max_points=MAX_POINTS) for stop in (lo, hi) if stop != w]
-        found += [b for b in new if b.param.size > 1]
+        new = [_follow(p, name, stop, orb.n, orb.x, orb.v, MAX_POINTS)
+               for stop in (lo, hi) if stop != w]
+        new = [b for b in new if b is not None and b.param.size > 1]
+        found += new
         for b in new:
             for e in b.events:
                 if e.kind != "period-doubling" or 2 * b.n > MAX_PERIOD:
@@ -126,9 +140,8 @@ def compute(run: Run, seed_values: list[float], live=lambda: True) -> BranchSet:
                 if not live() or time.perf_counter() - tic > WALL_TIME:
                     break
                 stop = hi if e.value < hi else lo
-                d = il.continuation(e.params, name, stop, n=2 * b.n, x0=e.x, v0=e.v,
-                                    max_points=MAX_POINTS_DOUBLED)
-                if d.param.size > 1:
+                d = _follow(e.params, name, stop, 2 * b.n, e.x, e.v, MAX_POINTS_DOUBLED)
+                if d is not None and d.param.size > 1:
                     found.append(d)
     complete = done == len(seed_values) and live()
     events = sum(len(b.events) for b in found)
