@@ -65,6 +65,20 @@ def test_branch_overlay_from_the_url(page, server, query):
     page.screenshot(path=str(RESULTS / name))
 
 
+def test_branch_checkbox_switches_the_overlay_and_the_url(page, server):
+    open_page(page, server, "?bif_n=100")
+    assert page.evaluate("Bokeh.documents[0].get_model_by_name('branches_stable')") is None
+    page.get_by_text("Bifurcation diagram range", exact=True).click()
+    box = page.locator(".ie-w-branches input").first
+    box.check()
+    page.wait_for_function(BRANCHES_READY, timeout=90_000, polling=200)
+    page.wait_for_function("() => location.search.includes('branches=1')", timeout=5_000)
+    box.uncheck()
+    page.wait_for_function("() => !ie.model('branches_stable').visible && "
+                           "ie.data('branches_stable').xs.length === 0", timeout=10_000)
+    page.wait_for_function("() => location.search.includes('branches=0')", timeout=5_000)
+
+
 def test_server_log_has_no_traceback(server):
     time.sleep(0.5)
     log = server.log.read_text(errors="replace")
