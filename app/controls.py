@@ -154,7 +154,8 @@ class Controls:
             self.stability,
             grid,
             pn.Row(self.progress, self.diagram_status, sizing_mode="stretch_width"),
-            *(pn.pane.Bokeh(v.figure, **pane) for v in views if v.wide and v.figure is not None),
+            *(pn.pane.Bokeh(v.figure, **pane) for v in views
+              if v.wide and v.figure is not None),
             sizing_mode="stretch_width")
         return pn.Row(sidebar, main, sizing_mode="stretch_width")
 

@@ -128,8 +128,8 @@ def compute_chunk(run: Run, values: np.ndarray, direction: int = 0) -> dict:
     bif = il.bifurcation(run.params, run.bif_param, values, t_end=run.t_end,
                          t_record=run.t_record, method="exact", x0=run.x0, v0=run.v0,
                          warm_start={0: False, 1: "up", -1: "down"}[direction],
-                         cap_per_value=MAX_IMPACTS_PER_VALUE, max_impacts=max_impacts, lyapunov=True,
-                         max_steps=max_steps)
+                         cap_per_value=MAX_IMPACTS_PER_VALUE, max_impacts=max_impacts,
+                         max_steps=max_steps, lyapunov=True)
     status = np.asarray(bif.status)
     omega, v = np.asarray(bif.param, dtype=float), np.asarray(bif.v, dtype=float)
     return {"omega": omega, "v": v,

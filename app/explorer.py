@@ -4,7 +4,10 @@ A settings change is validated into a ``Run``; what it changes decides the work:
 
 - the trajectory (``Run.scene_key``) or psi: the scene job (scene views, badge, marker;
   a psi change alone re-samples the Poincaré section only);
-- ``Run.diagram_key``: the diagram job restarts; omega alone only moves its marker.
+- ``Run.diagram_key``: the diagram job restarts; omega alone only moves its marker;
+- ``stability.readout_key`` (physics, start, window): the stability readout job;
+- ``branches`` on, or a finished diagram while it is on: the branch job (seeded from the
+  diagram's chunks; cancelled when the diagram restarts or the overlay is switched off).
 
 Each job is an ``app.jobs.Job`` (latest request wins, work off the event loop, results
 back on it); each view gets the results it shows through its hooks (app.views.base).
