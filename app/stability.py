@@ -33,8 +33,10 @@ from .state import Run
 #: repeating; a period-n orbit is looked for up to MAX_PERIOD periods.
 REPEAT_RTOL = 1e-6
 MAX_PERIOD = 16
-#: Newton may move the point this far (relative) and still be the orbit the motion is on.
+#: Newton may move the point this far (relative) and still be the orbit the motion is on;
+#: further for a motion that il.classify calls periodic but is still settling.
 SAME_ORBIT_RTOL = 1e-4
+SETTLING_RTOL = 1e-2
 #: Short words for il.classify's kinds (its full label is on the motion badge).
 VERDICTS = {"chaotic": "chaotic: λ₁ is positive by more than twice its error",
             "undetermined": "undetermined: λ₁ is not beyond twice its error from 0 — "
@@ -83,6 +85,21 @@ def repeat_period(px: np.ndarray, pv: np.ndarray, max_period: int = MAX_PERIOD) 
     return 0
 
 
+def orbit_at(p: il.Params, n: int, x: float, v: float, rtol: float):
+    """The period-n orbit through (x, v) on the section t = 0, or None: Newton from there
+    must converge and stay within ``rtol`` (relative) of it. A stable orbit of a period
+    dividing n is preferred (a period-1 orbit settled onto slowly, through multipliers
+    near -1, also nearly repeats after 2); an unstable one is not what the motion is on
+    (just past a period doubling, the period-2 motion passes near the period-1 orbit)."""
+    scale = max(1.0, abs(x), abs(v))
+    for d in [d for d in range(1, n) if n % d == 0] + [n]:
+        orb = il.periodic_orbit(p, d, x0=x, v0=v, phase=0.0)
+        near = orb.converged and max(abs(orb.x - x), abs(orb.v - v)) <= rtol * scale
+        if near and (d == n or orb.stable):
+            return orb
+    return None
+
+
 def settled_orbit(p: il.Params, x0, v0: float, t_end: float, t_record: float):
     """The periodic orbit a run from (x0, v0) has settled on by ``t_end``, or None.
 
@@ -94,17 +111,22 @@ def settled_orbit(p: il.Params, x0, v0: float, t_end: float, t_record: float):
     n = repeat_period(px, pv) if sol.status == 0 else 0
     if n == 0:
         return None, sol
-    orb = il.periodic_orbit(p, n, x0=float(px[-1]), v0=float(pv[-1]), phase=0.0)
-    scale = max(1.0, abs(float(px[-1])), abs(float(pv[-1])))
-    moved = max(abs(orb.x - px[-1]), abs(orb.v - pv[-1]))
-    if not orb.converged or moved > SAME_ORBIT_RTOL * scale:
-        return None, sol
-    return orb, sol
+    return orbit_at(p, n, float(px[-1]), float(pv[-1]), SAME_ORBIT_RTOL), sol
 
 
 def _stability_readout(key: tuple) -> Readout:
     p, x0, v0, t_end, t_record = key
     orb, sol = settled_orbit(p, x0, v0, t_end, t_record)
+    settling = ""
+    if orb is None:
+        # il.classify's looser test may see a period the strict one missed (an orbit
+        # still settling, with a multiplier near the unit circle, or a period above 16)
+        motion = il.classify(sol)
+        if motion.kind == "periodic" and math.isfinite(motion.period) and len(sol.poincare):
+            orb = orbit_at(p, int(motion.period), float(sol.poincare.x[-1]),
+                           float(sol.poincare.v[-1]), SETTLING_RTOL)
+            orb = orb if orb is not None and orb.stable else None
+            settling = " (the motion is still settling onto it at the end of the window)"
     if orb is not None:
         if orb.sticks:
             verdict = ("sticks to the wall in every cycle: the release time is fixed by the "
@@ -112,11 +134,10 @@ def _stability_readout(key: tuple) -> Readout:
                        "(superstable)")
         else:
             verdict = "stable" if orb.stable else "unstable (the motion is leaving it)"
-        return Readout("orbit", verdict, orbit=orb)
+        return Readout("orbit", verdict + settling, orbit=orb)
     # The label is il.classify's, which measures before it says "chaotic"; the exponents
     # shown are the same measurement (continued from the run's end over a window as long
     # as its own, within about the run's own work), with both exponents.
-    motion = il.classify(sol)
     tf, xf, vf, _ = sol.final
     window = sol.t_end - sol.t_record
     budget = il.RunLimits(max_impacts=2 * sol.n_impacts + 1000, max_steps=2 * sol.nsteps + 10000)

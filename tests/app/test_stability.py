@@ -227,3 +227,28 @@ def test_branch_overlay_is_built_on_request_and_switched_off(make_explorer):
 def test_branch_flag_in_the_url_must_be_on_or_off(make_explorer):
     e = make_explorer(branches="maybe")
     assert "branches" in e.message and e.settings.branches is False
+
+
+def test_a_slowly_settling_period_one_orbit_is_not_called_period_two(make_explorer):
+    """At omega = 1.25 (r = 0.8), just above a period doubling at about 1.23, the
+    multiplier near -1 makes the motion settle slowly; the readout must name the
+    period-1 orbit, the stable fixed point of the closed-form one-period map."""
+    e = make_explorer(omega="1.25")
+    p = il.Params(omega=1.25)
+    found = []
+    for t_guess in np.linspace(0.0, p.T, 8, endpoint=False):
+        try:
+            t1, u = period_one_orbit(p, [t_guess, -1.4])
+        except AssertionError:
+            continue
+        x, v = flight(p, t1, p.g, -p.r * u, p.T)
+        h = 1e-6
+        J = np.column_stack([(one_period_map(p, x + h * (j == 0), v + h * (j == 1), t1)
+                              - one_period_map(p, x - h * (j == 0), v - h * (j == 1), t1))
+                             / (2 * h) for j in range(2)])
+        if u < 0 and np.max(np.abs(np.linalg.eigvals(J))) < 1:
+            found.append((x, v))
+    assert found, "no stable closed-form period-1 orbit"
+    orb = e.readout.orbit
+    assert orb is not None and orb.label == "1-impact period-1" and orb.stable
+    assert min(max(abs(orb.x - x), abs(orb.v - v)) for x, v in found) < 1e-8
