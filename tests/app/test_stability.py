@@ -252,3 +252,14 @@ def test_a_slowly_settling_period_one_orbit_is_not_called_period_two(make_explor
     orb = e.readout.orbit
     assert orb is not None and orb.label == "1-impact period-1" and orb.stable
     assert min(max(abs(orb.x - x), abs(orb.v - v)) for x, v in found) < 1e-8
+
+
+def test_strip_of_an_up_and_down_sweep_has_both_chains(make_explorer):
+    e = make_explorer(bif_sweep="both", bif_min="2.4", bif_max="3.0", bif_n="13")
+    d = e.lyapunov.source.data
+    values = np.linspace(2.4, 3.0, 13)
+    assert np.array_equal(np.asarray(d["omega"]), np.repeat(values, 2))
+    assert list(d["sweep"]) == [1, -1] * 13                     # up before down, per value
+    finite = np.isfinite(np.asarray(d["lyapunov"]))
+    assert {c for c, f, s in zip(d["color"], finite, d["sweep"]) if f and s == 1} <= {"#1f5fa8"}
+    assert {c for c, f, s in zip(d["color"], finite, d["sweep"]) if f and s == -1} <= {"#e08214"}
