@@ -24,7 +24,7 @@ import panel as pn
 from . import accuracy, branches, compute, diagram, stability, state
 from .controls import Controls
 from .downloads import Downloads
-from .jobs import Job, session_dispatcher, session_doc
+from .jobs import Job, SessionLoop, session_doc
 from .panel_fixes import release_links
 from .scenes import BY_KEY
 from .settings import QUERY_NAMES, SYMBOLS, Settings
@@ -51,7 +51,7 @@ class Explorer(pn.viewable.Viewer):
         self._keep_message = True         # the link's message stays until a user change
         self._restoring = False           # falling back to defaults (not a user change)
         doc = self._doc = session_doc()
-        dispatch = session_dispatcher(doc)
+        dispatch = self._loop = SessionLoop(doc)
         self._loaded = doc is None        # served: the diagram starts once the page is up
         self.views = [cls() for cls in VIEWS]
         for view in self.views:
@@ -107,6 +107,7 @@ class Explorer(pn.viewable.Viewer):
         for job in (self.scene_job, self.runner, self.accuracy_job, self.stability_job,
                     self.branch_job):
             job.cancel()
+        self._loop.close()
         self.release_links()
 
     def release_links(self) -> None:
@@ -161,6 +162,8 @@ class Explorer(pn.viewable.Viewer):
         self.scene_job.submit(run)
 
     def _on_load(self) -> None:
+        """The page is up: results computed so far go out now, the diagram starts."""
+        self._loop.ready()
         with pn.io.hold(self._doc):
             self._loaded = True
             self._restart_diagram(self._wanted)
