@@ -21,7 +21,7 @@ import panel as pn
 from . import accuracy, compute, diagram, research, state
 from .controls import Controls
 from .downloads import Downloads
-from .jobs import Job, session_dispatcher, session_doc
+from .jobs import Job, SessionLoop, session_doc
 from .panel_fixes import release_links
 from .research_panel import MAP, ResearchPanel
 from .scenes import BY_KEY
@@ -50,7 +50,7 @@ class Explorer(pn.viewable.Viewer):
         self._keep_message = True         # the link's message stays until a user change
         self._restoring = False           # falling back to defaults (not a user change)
         doc = self._doc = session_doc()
-        dispatch = session_dispatcher(doc)
+        dispatch = self._loop = SessionLoop(doc)
         self._loaded = doc is None        # served: the diagram starts once the page is up
         self.views = [cls() for cls in VIEWS]
         for view in self.views:
@@ -99,6 +99,7 @@ class Explorer(pn.viewable.Viewer):
         """The tab is gone: stop its jobs and let the whole session be collected."""
         for job in (self.scene_job, self.runner, self.accuracy_job, self.research_job):
             job.cancel()
+        self._loop.close()
         self.release_links()
 
     def release_links(self) -> None:
@@ -147,6 +148,8 @@ class Explorer(pn.viewable.Viewer):
         self.scene_job.submit(run)
 
     def _on_load(self) -> None:
+        """The page is up: results computed so far go out now, the diagram starts."""
+        self._loop.ready()
         with pn.io.hold(self._doc):
             self._loaded = True
             self._restart_diagram(self._wanted)
