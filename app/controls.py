@@ -144,7 +144,7 @@ class Controls:
         grid = pn.GridBox(*(pn.pane.Bokeh(v.figure, **pane) for v in views
                             if not v.wide and v.figure is not None),
                           ncols=2, sizing_mode="stretch_width")
-        main = pn.Column(
+        main = self.main = pn.Column(
             pn.pane.Markdown("## Impact Explorer — forced oscillator with a rigid endstop",
                              margin=(0, 10)),
             self.message_pane,
@@ -158,6 +158,10 @@ class Controls:
               if v.wide and v.figure is not None),
             sizing_mode="stretch_width")
         return pn.Row(sidebar, main, sizing_mode="stretch_width")
+
+    def add_research(self, card) -> None:
+        """The research card, last on the page (below the six main figures)."""
+        self.main.append(card)
 
     # -- what the session shows --------------------------------------------------------
 

@@ -21,11 +21,12 @@ from concurrent.futures import ThreadPoolExecutor
 
 import panel as pn
 
-from . import accuracy, branches, compute, diagram, stability, state
+from . import accuracy, branches, compute, diagram, research, stability, state
 from .controls import Controls
 from .downloads import Downloads
 from .jobs import Job, SessionLoop, session_doc
 from .panel_fixes import release_links
+from .research_panel import MAP, ResearchPanel
 from .scenes import BY_KEY
 from .settings import QUERY_NAMES, SYMBOLS, Settings
 from .views import VIEWS
@@ -36,6 +37,9 @@ _SCENE_POOL = ThreadPoolExecutor(max_workers=2, thread_name_prefix="impact-scene
 _ACCURACY_POOL = ThreadPoolExecutor(max_workers=1, thread_name_prefix="impact-accuracy")
 _STABILITY_POOL = ThreadPoolExecutor(max_workers=1, thread_name_prefix="impact-stability")
 _BRANCH_POOL = ThreadPoolExecutor(max_workers=1, thread_name_prefix="impact-branches")
+#: Threads that drive regime maps and basins (each drives the core's own pool): at most
+#: this many sessions compute one at a time, the others wait their turn.
+_RESEARCH_POOL = ThreadPoolExecutor(max_workers=2, thread_name_prefix="impact-research")
 
 
 class Explorer(pn.viewable.Viewer):
@@ -82,6 +86,12 @@ class Explorer(pn.viewable.Viewer):
                               lambda req, t: branches.branches_for(req[0], req[1], t),
                               dispatch, pool=None if doc is None else _BRANCH_POOL,
                               on_result=self._branches_done)
+        # one heavy job per session: the regime map or the basins, the newest request wins
+        self.research_job = Job("research", self._research_work, dispatch,
+                                pool=None if doc is None else _RESEARCH_POOL)
+        self.research = ResearchPanel(self.widgets, compute=self.compute_research,
+                                      cancel=self.cancel_research, pick=self.pick)
+        self.controls.add_research(self.research.card)
         self.settings.param.watch(self._on_settings, list(QUERY_NAMES))
         self._apply()
         if errors:
@@ -105,7 +115,7 @@ class Explorer(pn.viewable.Viewer):
     def _on_session_destroyed(self, session_context) -> None:
         """The tab is gone: stop its jobs and let the whole session be collected."""
         for job in (self.scene_job, self.runner, self.accuracy_job, self.stability_job,
-                    self.branch_job):
+                    self.branch_job, self.research_job):
             job.cancel()
         self._loop.close()
         self.release_links()
@@ -202,6 +212,49 @@ class Explorer(pn.viewable.Viewer):
     def _follow_diagram(self, run, ticket) -> None:
         diagram.follow(run, ticket, self._on_chunk, self._on_done, self._on_diagram_error)
 
+    def compute_research(self, kind: str) -> None:
+        """Compute the regime map (``MAP``) or the basins (``BASINS``) of the current
+        settings; supersedes the one under way."""
+        run = self._wanted
+        if run is None:
+            return
+        if not self.research.built:
+            self.research.build()
+        if kind == MAP:
+            request = research.map_request(run)
+        else:
+            shown = self.scene.trajectory if self.scene is not None and \
+                self.scene.run.params == run.params else None
+            request = research.BasinsRequest(run, *research.basins_window(run, shown),
+                                             run.basins_n)
+        self.research.started(kind, request)
+        self.research_job.submit((kind, request))
+
+    def cancel_research(self) -> None:
+        self.research_job.cancel()
+        self.research.cancelled()
+
+    def _research_work(self, job, ticket) -> None:
+        """Stream the blocks of a regime map or basins picture to the research panel."""
+        kind, request = job
+        block = None
+        try:
+            blocks = (research.map_rows(request) if kind == MAP
+                      else research.basins_rows(request))
+            try:
+                for block in blocks:
+                    ticket.send(self.research.rows, kind, block)
+                    if not ticket.live:       # before the next block is computed
+                        break
+            finally:
+                blocks.close()
+        except Exception as exc:     # a message on the view, one log line, no traceback
+            log.warning("%s failed: %s: %s", kind, type(exc).__name__, exc)
+            ticket.send(self.research.failed, kind, f"{type(exc).__name__}: {exc}")
+        else:
+            ticket.send(self.research.finished, kind, block)
+        ticket.finish()
+
     def _on_accuracy(self) -> None:
         self.controls.show_accuracy(None)
         self.accuracy_job.submit(self.run)
@@ -228,6 +281,7 @@ class Explorer(pn.viewable.Viewer):
         if scene is not self.scene:
             for view in self.views:
                 view.show_scene(scene)
+            self.research.show_scene(scene)
             self.controls.show_badge(scene)
         if section is not self.section:
             for view in self.views:
