@@ -30,6 +30,7 @@ from .research_panel import MAP, ResearchPanel
 from .scenes import BY_KEY
 from .settings import QUERY_NAMES, SYMBOLS, Settings
 from .views import VIEWS
+from .views._figure import share_helpers
 
 log = logging.getLogger(__name__)
 
@@ -63,6 +64,7 @@ class Explorer(pn.viewable.Viewer):
             view.connect(self.pick)
         for view in self.views:
             view.link({v.key: v for v in self.views})
+        share_helpers([v.figure for v in self.views if v.figure is not None])
         self.downloads = Downloads(self)
         self.controls = c = Controls(self.settings, self.views, on_scene=self.load_scene,
                                      on_accuracy=self._on_accuracy, downloads=self.downloads)

@@ -55,6 +55,8 @@ AXIS_LABELS = {"omega": "driving frequency ω (rad/s)", "r": "restitution r",
 SCENE, SECTION, DIAGRAM = "scene", "section", "diagram"
 #: Group of the research settings: shown in the research card, not in the sidebar.
 RESEARCH = "Research"
+#: Group of the settings shown above the diagram (not in the sidebar): its overlays.
+ON_DIAGRAM = "On the diagram"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -182,7 +184,7 @@ SETTINGS: tuple[Setting, ...] = (
     Setting("branches", "periodic branches on the diagram", False,
             "Continue the periodic orbits the diagram finds over its range: stable parts "
             "solid, unstable dashed, bifurcations and grazings marked (URL: branches=1).",
-            frozenset(), "Bifurcation diagram range", widget="checkbox", kind="flag"),
+            frozenset(), ON_DIAGRAM, widget="checkbox", kind="flag"),
     Setting("map_x", "regime map x", "omega", "Parameter along the regime map's x axis.",
             frozenset(), RESEARCH, widget="select", kind="choice", choices=SWEEPABLE,
             half=True),
