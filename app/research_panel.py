@@ -24,8 +24,9 @@ class ResearchPanel:
     """``compute(kind)`` asks the session for a picture (kind MAP or BASINS);
     ``cancel()`` stops it; ``pick(**settings)`` is what taps on the views do."""
 
-    def __init__(self, widgets: dict, *, compute, cancel, pick):
+    def __init__(self, widgets: dict, *, compute, cancel, pick, downloads):
         self._widgets, self._compute, self._cancel, self._pick = widgets, compute, cancel, pick
+        self._downloads = downloads
         self.views: dict = {}               # kind -> view, once built
         self.running: str | None = None     # kind being computed
         self._keys: dict = {}               # kind -> key of the request shown
@@ -70,6 +71,10 @@ class ResearchPanel:
             stop = pn.widgets.Button(label="Cancel", width=80, css_classes=[f"ie-{kind}-cancel"])
             stop.on_click(lambda event: self._cancel())
             self.buttons[kind] = button
+            save = pn.widgets.FileDownload(
+                callback=lambda v=view: getattr(self._downloads, f"{v.key}_csv")(v),
+                filename=f"{view.key}.csv", label="CSV", width=70,
+                css_classes=[f"ie-{kind}-csv"])
             self.progress[kind] = pn.indicators.Progress(value=0, max=100, width=160,
                                                          height=14, margin=(14, 10))
             self.status[kind] = NamedHTML("", model_name=f"{view.key}_status",
@@ -77,7 +82,7 @@ class ResearchPanel:
                                           sizing_mode="stretch_width")
             self.legend[kind] = pn.pane.HTML(view.legend, width=260,
                                              css_classes=[f"ie-{kind}-legend"])
-            controls = pn.Row(*(self._widgets[n] for n in names), button, stop,
+            controls = pn.Row(*(self._widgets[n] for n in names), button, stop, save,
                               sizing_mode="stretch_width")
             tabs.append((
                 "Regime map" if kind == MAP else "Basins",

@@ -1,6 +1,7 @@
 """The research card in headless Chromium: the regime map and the basins fill when their
 tab opens, and a tap on each changes the scene. Screenshots go to test-results/."""
 import time
+from pathlib import Path
 
 from playwright.sync_api import expect
 from test_app_browser import RESULTS, open_app, text
@@ -41,6 +42,13 @@ def test_regime_map_and_basins_fill_and_taps_change_the_scene(page, server):
                            timeout=10_000)
     page.wait_for_timeout(300)
     page.locator(".ie-research").screenshot(path=str(RESULTS / "regime_map.png"))
+
+    with page.expect_download(timeout=15_000) as info:
+        page.locator(".ie-map-csv").get_by_text("CSV").click()
+    lines = Path(info.value.path()).read_text().splitlines()
+    assert lines[0].startswith("# m = ") and "# map_x = omega" in lines
+    body = [line for line in lines if not line.startswith("#")]
+    assert body[0] == "omega,r,m,n,class" and len(body) == 1 + 100 * 100
 
     before = disp_sum(page)
     tap(page, "regime_map_figure", 2.8, 0.6)
