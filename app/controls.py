@@ -8,6 +8,8 @@ callbacks it passes in.
 """
 from __future__ import annotations
 
+import html
+
 import panel as pn
 import param
 
@@ -19,18 +21,13 @@ SIDEBAR_WIDTH = 310
 STATUS_NAME = "bifurcation_status"
 CAPTION = ("Paper defaults: m = 1, c = 0.05, k = 1, g = 0, r = 0.8, ω = 2. "
            "Pick a scene of the paper or move a slider.")
+PICK = "Pick a scene of the paper…"
 CHANGED_NOTE = "\n\n*Settings changed since this scene was loaded.*"
 CSS = """
 .ie-badge {font-size: 16px;}
 .ie-badge b {color: #1f5fa8;}
 .ie-accuracy td, .ie-accuracy th {padding: 2px 6px; font-size: 12px; text-align: left;}
 """
-
-
-class EditableSlider(pn.widgets.EditableFloatSlider):
-    """EditableFloatSlider whose slider reports moves after 10 ms instead of 50 ms."""
-
-    _slider_widget = PromptFloatSlider
 
 
 class NamedHTML(pn.pane.HTML):
@@ -48,25 +45,59 @@ class NamedHTML(pn.pane.HTML):
 
 
 def make_widget(settings, s):
-    """The widget that edits setting ``s`` of ``settings``."""
+    """(widget, page item) editing setting ``s`` of ``settings``: the widget holds the
+    value as typed (a number box, select), the item is what the page shows.
+
+    Light on purpose (a page has ~20 of them): a slider is a labelled number box over a
+    plain slider, both bound to the same setting (no composite widget, no JS links).
+    Only selects carry a tooltip model; the docs of a card's settings are the hover
+    text of its title (see ``_card``).
+    """
     par = settings.param[s.name]
-    common = dict(label=s.label, sizing_mode="stretch_width", css_classes=[f"ie-w-{s.name}"])
+    css = [f"ie-w-{s.name}"]
     if s.widget == "slider":
-        return EditableSlider.from_param(par, start=s.soft[0], end=s.soft[1], step=s.step,
-                                         format=s.fmt, **common)
+        box = pn.widgets.FloatInput.from_param(par, label=s.label, format=s.fmt,
+                                               description=None, sizing_mode="stretch_width")
+        slider = PromptFloatSlider.from_param(par, label="", start=s.soft[0], end=s.soft[1],
+                                              step=s.step, show_value=False,
+                                              sizing_mode="stretch_width", margin=(0, 10))
+        return box, pn.Column(box, slider, css_classes=css, sizing_mode="stretch_width")
+    common = dict(label=s.label, sizing_mode="stretch_width", css_classes=css)
     if s.widget == "select":
-        return pn.widgets.Select.from_param(par, description=s.doc, **common)
+        select = pn.widgets.Select.from_param(par, description=s.doc, **common)
+        return select, select
     cls = pn.widgets.IntInput if s.kind == "integer" else pn.widgets.FloatInput
     extra = {"format": s.fmt} if s.fmt else {}
-    return cls.from_param(par, description=s.doc, **common, **extra)
+    box = cls.from_param(par, description=None, **common, **extra)
+    return box, box
+
+
+def _card(title: str, objects: list, open_: bool = False):
+    """A sidebar group. Open ones are a titled column whose title's hover text holds
+    the docs of its settings; a collapsed card gets its contents (and their Bokeh
+    models) only when first opened, so a page that never opens it never pays for them."""
+    if open_:
+        docs = html.escape("\n".join(f"{s.label.split()[0]}: {s.doc}" for s in SETTINGS
+                                      if s.group == title), quote=True)
+        head = pn.pane.HTML(f"<b title=\"{docs}\">{title} ⓘ</b>", margin=(5, 10, 0, 10),
+                            css_classes=["ie-group"])
+        return pn.Column(head, *objects, sizing_mode="stretch_width")
+    card = pn.layout.Card(title=title, collapsed=True, sizing_mode="stretch_width")
+
+    def opened(event):
+        if not event.new and not card.objects:
+            card.objects = objects
+    card.param.watch(opened, "collapsed")
+    return card
 
 
 class Controls:
     """Widgets, panes and layout of one session's page."""
 
     def __init__(self, settings, views, *, on_scene, on_accuracy, downloads):
-        self.widgets = {s.name: make_widget(settings, s) for s in SETTINGS}
-        self._docs = {s.name: s.doc for s in SETTINGS}
+        made = {s.name: make_widget(settings, s) for s in SETTINGS}
+        self.widgets = {name: widget for name, (widget, _) in made.items()}
+        self._items = {name: item for name, (_, item) in made.items()}
         self.message = ""
         self.message_pane = pn.pane.Alert("", alert_type="warning", visible=False,
                                           css_classes=["ie-message"],
@@ -75,13 +106,10 @@ class Controls:
                                   stylesheets=[CSS])
         self.caption = pn.pane.Markdown(CAPTION, css_classes=["ie-caption"],
                                         sizing_mode="stretch_width")
-        self.scene_buttons = []
-        for sc in SCENES:
-            b = pn.widgets.Button(label=sc.label, color="primary", variant="outline",
-                                  margin=(2, 3), css_classes=[f"ie-scene-{sc.key}"],
-                                  description=sc.caption.split("**")[1])
-            b.on_click(lambda event, key=sc.key: on_scene(key))
-            self.scene_buttons.append(b)
+        self.scene_picker = pn.widgets.Select(
+            label="Scenes of the paper", options={PICK: PICK, **{sc.label: sc.key for sc in SCENES}},
+            value=PICK, css_classes=["ie-scene"], width=260, margin=(5, 10))
+        self.scene_picker.param.watch(lambda event: self._picked(event.new, on_scene), "value")
         self.progress = pn.indicators.Progress(value=0, max=100, width=200, height=14,
                                                bar_color="primary", margin=(8, 10))
         self.diagram_status = NamedHTML("", model_name=STATUS_NAME,
@@ -96,13 +124,12 @@ class Controls:
                                           stylesheets=[CSS], sizing_mode="stretch_width")
         self.layout = self._layout(views, downloads)
 
-    # -- layout ------------------------------------------------------------------------
+    def _picked(self, key, on_scene) -> None:
+        if key != PICK:
+            on_scene(key)
+            self.scene_picker.value = PICK      # the same scene can be picked again
 
-    def _with_tip(self, name):
-        """Sliders have no tooltip of their own: an (i) icon with the setting's doc."""
-        return pn.Row(self.widgets[name],
-                      pn.widgets.TooltipIcon(value=self._docs[name], margin=(22, 0, 0, 0)),
-                      sizing_mode="stretch_width")
+    # -- layout ------------------------------------------------------------------------
 
     def _group(self, title: str) -> list:
         """The widgets of one sidebar card: sliders and selects on their own line,
@@ -110,27 +137,22 @@ class Controls:
         out, half = [], []
         for s in (s for s in SETTINGS if s.group == title):
             if s.half:
-                half.append(self.widgets[s.name])
+                half.append(self._items[s.name])
                 if len(half) == 2:
                     out.append(pn.Row(*half))
                     half = []
                 continue
-            out.append(self._with_tip(s.name) if s.widget == "slider" else self.widgets[s.name])
+            out.append(self._items[s.name])
         if half:
             out.append(pn.Row(*half))
         return out
 
     def _layout(self, views, downloads):
-        card = dict(sizing_mode="stretch_width")
         groups = [g for g in dict.fromkeys(s.group for s in SETTINGS) if g != RESEARCH]
-        cards = [pn.layout.Card(*self._group(g), title=g, **card,
-                                **({"collapsible": False} if i < 2 else {"collapsed": True}))
-                 for i, g in enumerate(groups)]
         sidebar = pn.Column(
-            *cards,
-            pn.layout.Card(*downloads.widgets, title="Downloads", collapsed=True, **card),
-            pn.layout.Card(self.accuracy_button, self.accuracy_pane, title="Accuracy",
-                           collapsed=True, **card),
+            *(_card(g, self._group(g), open_=i < 2) for i, g in enumerate(groups)),
+            _card("Downloads", downloads.widgets),
+            _card("Accuracy", [self.accuracy_button, self.accuracy_pane]),
             width=SIDEBAR_WIDTH)
         pane = dict(sizing_mode="stretch_width")
         grid = pn.GridBox(*(pn.pane.Bokeh(v.figure, **pane) for v in views if not v.wide),
@@ -139,11 +161,12 @@ class Controls:
             pn.pane.Markdown("## Impact Explorer — forced oscillator with a rigid endstop",
                              margin=(0, 10)),
             self.message_pane,
-            pn.FlexBox(*self.scene_buttons, sizing_mode="stretch_width"),
+            self.scene_picker,
             self.caption,
             self.badge,
             grid,
-            pn.Row(self.progress, self.diagram_status, sizing_mode="stretch_width"),
+            self.progress,
+            self.diagram_status,
             *(pn.pane.Bokeh(v.figure, **pane) for v in views if v.wide),
             sizing_mode="stretch_width")
         return pn.Row(sidebar, main, sizing_mode="stretch_width")

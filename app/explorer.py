@@ -27,6 +27,7 @@ from .research_panel import MAP, ResearchPanel
 from .scenes import BY_KEY
 from .settings import QUERY_NAMES, SYMBOLS, Settings
 from .views import VIEWS
+from .views._figure import share_helpers
 
 log = logging.getLogger(__name__)
 
@@ -56,6 +57,7 @@ class Explorer(pn.viewable.Viewer):
         for view in self.views:
             setattr(self, view.key, view)
             view.connect(self.pick)
+        share_helpers([v.figure for v in self.views])
         self.downloads = Downloads(self)
         self.controls = c = Controls(self.settings, self.views, on_scene=self.load_scene,
                                      on_accuracy=self._on_accuracy, downloads=self.downloads)

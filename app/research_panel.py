@@ -32,12 +32,8 @@ class ResearchPanel:
         self._keys: dict = {}               # kind -> key of the request shown
         self._scene = None
         self._t0 = 0.0
-        self.card = pn.layout.Card(
-            pn.pane.Markdown("Open to compute a regime map (motion class over two "
-                             "parameters) and the basins of attraction of the current "
-                             "parameters.", margin=(0, 10)),
-            title=TITLE, collapsed=True, sizing_mode="stretch_width",
-            css_classes=["ie-research"])
+        self.card = pn.layout.Card(title=TITLE, collapsed=True, sizing_mode="stretch_width",
+                                   css_classes=["ie-research"])
         self.card.param.watch(self._on_toggle, "collapsed")
 
     @property
@@ -57,7 +53,9 @@ class ResearchPanel:
         """Make both views and the card's contents (first opening only)."""
         from .views.basins import BasinsView
         from .views.regime_map import RegimeMapView
+        from .views._figure import share_helpers
         self.views = {MAP: RegimeMapView(), BASINS: BasinsView()}
+        share_helpers([v.figure for v in self.views.values()])
         for view in self.views.values():
             view.connect(self._pick)
         self.status, self.progress, self.legend, self.buttons = {}, {}, {}, {}

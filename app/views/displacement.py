@@ -4,7 +4,7 @@ from __future__ import annotations
 from bokeh.models import ColumnDataSource, Range1d, Span
 
 from ..compute import SceneData
-from ._figure import IMPACT, LINE, WALL, make_figure
+from ._figure import IMPACT, LINE, TIME_SERIES_TOOLS, WALL, make_figure
 from .base import View
 
 #: The x axis opens on the last few periods; reset/zoom out shows the whole window.
@@ -19,7 +19,7 @@ class DisplacementView(View):
         self.impacts = ColumnDataSource({"t": [], "x": []})
         self.figure = make_figure("displacement_figure", "Displacement x(τ)",
                                   "time τ (s)", "displacement x",
-                                  x_range=Range1d(0.0, 1.0))
+                                  x_range=Range1d(0.0, 1.0), tools=TIME_SERIES_TOOLS)
         self.wall = Span(location=0.0, dimension="width", line_color=WALL,
                          line_dash="dashed", line_width=1.5, name="displacement_wall")
         self.figure.add_layout(self.wall)

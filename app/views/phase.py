@@ -4,7 +4,7 @@ from __future__ import annotations
 from bokeh.models import ColumnDataSource, Span
 
 from ..compute import SceneData
-from ._figure import LINE, WALL, make_figure
+from ._figure import CURVE_TOOLS, LINE, WALL, make_figure
 from .base import View
 
 
@@ -14,7 +14,7 @@ class PhaseView(View):
     def __init__(self):
         self.source = ColumnDataSource({"x": [], "v": []})
         self.figure = make_figure("phase_figure", "Phase trajectory (x, ẋ)",
-                                  "displacement x", "velocity ẋ")
+                                  "displacement x", "velocity ẋ", tools=CURVE_TOOLS)
         self.wall = Span(location=0.0, dimension="height", line_color=WALL,
                          line_dash="dashed", line_width=1.5, name="phase_wall")
         self.figure.add_layout(self.wall)

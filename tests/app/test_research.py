@@ -24,7 +24,7 @@ def tap(view, x, y):
 
 def test_research_card_is_built_only_when_opened(make_explorer):
     e = make_explorer()
-    assert not e.research.built and len(e.research.card.objects) == 1
+    assert not e.research.built and len(e.research.card.objects) == 0
     e.research.card.collapsed = False           # opening computes the open tab (the map)
     assert e.research.built
     assert e.research_job.done.wait(120)
