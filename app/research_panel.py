@@ -80,6 +80,8 @@ class ResearchPanel:
                                           sizing_mode="stretch_width")
             self.legend[kind] = pn.pane.HTML(view.legend, width=260,
                                              css_classes=[f"ie-{kind}-legend"])
+            for n in names:             # (in the sidebar they would stretch; here not)
+                self._widgets[n].param.update(sizing_mode="fixed", width=150)
             controls = pn.Row(*(self._widgets[n] for n in names), button, stop, save,
                               sizing_mode="stretch_width")
             tabs.append((
