@@ -92,7 +92,8 @@ class Explorer(pn.viewable.Viewer):
         self.research_job = Job("research", self._research_work, dispatch,
                                 pool=None if doc is None else _RESEARCH_POOL)
         self.research = ResearchPanel(self.widgets, compute=self.compute_research,
-                                      cancel=self.cancel_research, pick=self.pick)
+                                      cancel=self.cancel_research, pick=self.pick,
+                                      downloads=self.downloads)
         self.controls.add_research(self.research.card)
         self.settings.param.watch(self._on_settings, list(QUERY_NAMES))
         self._apply()

@@ -24,19 +24,16 @@ class ResearchPanel:
     """``compute(kind)`` asks the session for a picture (kind MAP or BASINS);
     ``cancel()`` stops it; ``pick(**settings)`` is what taps on the views do."""
 
-    def __init__(self, widgets: dict, *, compute, cancel, pick):
+    def __init__(self, widgets: dict, *, compute, cancel, pick, downloads):
         self._widgets, self._compute, self._cancel, self._pick = widgets, compute, cancel, pick
+        self._downloads = downloads
         self.views: dict = {}               # kind -> view, once built
         self.running: str | None = None     # kind being computed
         self._keys: dict = {}               # kind -> key of the request shown
         self._scene = None
         self._t0 = 0.0
-        self.card = pn.layout.Card(
-            pn.pane.Markdown("Open to compute a regime map (motion class over two "
-                             "parameters) and the basins of attraction of the current "
-                             "parameters.", margin=(0, 10)),
-            title=TITLE, collapsed=True, sizing_mode="stretch_width",
-            css_classes=["ie-research"])
+        self.card = pn.layout.Card(title=TITLE, collapsed=True, sizing_mode="stretch_width",
+                                   css_classes=["ie-research"])
         self.card.param.watch(self._on_toggle, "collapsed")
 
     @property
@@ -56,7 +53,9 @@ class ResearchPanel:
         """Make both views and the card's contents (first opening only)."""
         from .views.basins import BasinsView
         from .views.regime_map import RegimeMapView
+        from .views._figure import share_helpers
         self.views = {MAP: RegimeMapView(), BASINS: BasinsView()}
+        share_helpers([v.figure for v in self.views.values()])
         for view in self.views.values():
             view.connect(self._pick)
         self.status, self.progress, self.legend, self.buttons = {}, {}, {}, {}
@@ -70,6 +69,10 @@ class ResearchPanel:
             stop = pn.widgets.Button(label="Cancel", width=80, css_classes=[f"ie-{kind}-cancel"])
             stop.on_click(lambda event: self._cancel())
             self.buttons[kind] = button
+            save = pn.widgets.FileDownload(
+                callback=lambda v=view: getattr(self._downloads, f"{v.key}_csv")(v),
+                filename=f"{view.key}.csv", label="CSV", width=70,
+                css_classes=[f"ie-{kind}-csv"])
             self.progress[kind] = pn.indicators.Progress(value=0, max=100, width=160,
                                                          height=14, margin=(14, 10))
             self.status[kind] = NamedHTML("", model_name=f"{view.key}_status",
@@ -77,7 +80,9 @@ class ResearchPanel:
                                           sizing_mode="stretch_width")
             self.legend[kind] = pn.pane.HTML(view.legend, width=260,
                                              css_classes=[f"ie-{kind}-legend"])
-            controls = pn.Row(*(self._widgets[n] for n in names), button, stop,
+            for n in names:             # (in the sidebar they would stretch; here not)
+                self._widgets[n].param.update(sizing_mode="fixed", width=150)
+            controls = pn.Row(*(self._widgets[n] for n in names), button, stop, save,
                               sizing_mode="stretch_width")
             tabs.append((
                 "Regime map" if kind == MAP else "Basins",

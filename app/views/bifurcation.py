@@ -55,18 +55,12 @@ class BifurcationView(View):
                                   AXIS_LABELS["omega"], "impact velocity ẋ(τ_I−)",
                                   x_range=Range1d(0.1, 5.0), height=340,
                                   tools=POINTS_TOOLS + ",save")
-        common = dict(x="omega", y="v", size=2, alpha=0.55)
-        renderers = [
-            self.figure.scatter(source=self.source, color=WALL, name="bifurcation", **common),
-            self.figure.scatter(source=self.up_source, color=UP, name="bifurcation_up",
-                                **common),
-            self.figure.scatter(source=self.down_source, color=DOWN, name="bifurcation_down",
-                                **common)]
-        self.legend = Legend(items=[LegendItem(label="sweep up", renderers=[renderers[1]]),
-                                    LegendItem(label="sweep down", renderers=[renderers[2]])],
-                             location="top_right", visible=False)
-        self.figure.add_layout(self.legend)
-        self.hover = HoverTool(renderers=renderers, tooltips=self._tooltips("omega"))
+        self._common = dict(x="omega", y="v", size=2, alpha=0.55)
+        self.renderers = [self.figure.scatter(source=self.source, color=WALL,
+                                              name="bifurcation", **self._common)]
+        self.legend = None
+        self.hover = HoverTool(renderers=list(self.renderers),
+                               tooltips=self._tooltips("omega"))
         self.figure.add_tools(self.hover)
         self.marker = Span(location=2.0, dimension="height", line_color=IMPACT,
                            line_width=2, line_alpha=0.7, name="bifurcation_marker",
@@ -75,6 +69,27 @@ class BifurcationView(View):
         self.figure.scatter("omega", "v", source=self.current, size=5, color=IMPACT,
                             name="bifurcation_current", level="overlay")
         self.figure.on_event(Tap, self._on_tap)
+
+    def _add_continuation(self) -> None:
+        """The up and down renderers and their legend, made on the first continuation
+        (about 13 Bokeh models a page that never sweeps up or down does without)."""
+        if self.legend is not None:
+            return
+        up = self.figure.scatter(source=self.up_source, color=UP, name="bifurcation_up",
+                                 **self._common)
+        down = self.figure.scatter(source=self.down_source, color=DOWN,
+                                   name="bifurcation_down", **self._common)
+        for r in (up, down):        # as share_helpers left the first renderer
+            r.nonselection_glyph = r.muted_glyph = None
+            first = self.renderers[0]
+            r.data_source.selection_policy = first.data_source.selection_policy
+            r.view.filter = first.view.filter
+        self.renderers += [up, down]
+        self.legend = Legend(items=[LegendItem(label="sweep up", renderers=[up]),
+                                    LegendItem(label="sweep down", renderers=[down])],
+                             location="top_right")
+        self.figure.add_layout(self.legend)
+        self.hover.renderers = list(self.renderers)
 
     @staticmethod
     def _tooltips(name: str) -> list:
@@ -93,7 +108,10 @@ class BifurcationView(View):
         self.figure.x_range.update(start=run.bif_min, end=run.bif_max)
         self.figure.xaxis.axis_label = AXIS_LABELS[name]
         self.hover.tooltips = self._tooltips(name)
-        self.legend.visible = run.bif_sweep == "both"
+        if run.bif_sweep != "independent":
+            self._add_continuation()
+        if self.legend is not None:
+            self.legend.visible = run.bif_sweep == "both"
         p = run.params
         fixed = ", ".join(f"{SYMBOLS[n]} = {getattr(p, n):g}" for n in SYMBOLS if n != name)
         mode = "" if run.bif_sweep == "independent" else f", sweep {run.bif_sweep}"

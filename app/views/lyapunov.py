@@ -11,7 +11,7 @@ downward triangle and a cross, and counted in the title, never dropped.
 from __future__ import annotations
 
 import numpy as np
-from bokeh.models import ColumnDataSource, Range1d, Span
+from bokeh.models import ColumnDataSource, Grid, Range1d, Span
 
 from ..settings import AXIS_LABELS
 from ..state import Run
@@ -24,8 +24,7 @@ UNDEFINED = ("x", "#b35900")          # λ₁ NaN
 FINITE = ("circle", LINE)
 #: Finite exponents in the diagram's colours: independent starts, sweep up, sweep down.
 SWEEP_COLORS = {0: LINE, 1: UP, -1: DOWN}
-#: Few tools (few Bokeh models): the x axis is the diagram's, zoomed there or here.
-TOOLS = "xpan,xwheel_zoom,reset"
+
 #: The y axis spans at least this much around 0, so that a strip of periodic motion
 #: (λ₁ ≈ −0.1) does not blow noise up.
 MIN_SPAN = 0.1
@@ -66,7 +65,11 @@ class LyapunovView(View):
         self.sweeps: list[np.ndarray] = []
         self.figure = make_figure("lyapunov_figure", "Largest Lyapunov exponent λ₁",
                                   "driving frequency ω (rad/s)", "λ₁ (1/s)", height=190,
-                                  y_range=Range1d(-MIN_SPAN, MIN_SPAN), tools=TOOLS)
+                                  y_range=Range1d(-MIN_SPAN, MIN_SPAN), tools="",
+                                  toolbar_location=None)
+        # few Bokeh models per page: no tools (the x axis is the diagram's, zoomed there)
+        # and no grid lines (the zero line is the one that matters)
+        self.figure.center = [m for m in self.figure.center if not isinstance(m, Grid)]
         self.figure.add_layout(Span(location=0.0, dimension="width", line_color=WALL,
                                     line_width=1, name="lyapunov_zero"))
         self.figure.scatter("omega", "y", source=self.source, size="size", marker="marker",

@@ -45,6 +45,8 @@ class RegimeMapView(View):
         self.current = ColumnDataSource({"x": [], "y": []})
         self.request: MapRequest | None = None
         self.image = np.full((1, 1), np.nan, np.float32)
+        self.impacts = self.period = np.zeros((1, 1), dtype=np.int64)   # classify's codes
+        self.labels: tuple = ()           # label of each class index
         self.legend = legend_html([])
         self.rows_done = 0
         self._pick = None
@@ -73,6 +75,9 @@ class RegimeMapView(View):
         vx, vy = req.values_x, req.values_y
         dx, dy = (vx[-1] - vx[0]) / (vx.size - 1), (vy[-1] - vy[0]) / (vy.size - 1)
         self.image = np.full((vy.size, vx.size), np.nan, np.float32)
+        self.impacts = np.zeros((vy.size, vx.size), dtype=np.int64)
+        self.period = np.zeros((vy.size, vx.size), dtype=np.int64)
+        self.labels = ()
         self.rows_done = 0
         self.legend = legend_html([])
         self.source.data = {"image": [self.image], "x": [vx[0] - dx / 2], "y": [vy[0] - dy / 2],
@@ -98,7 +103,10 @@ class RegimeMapView(View):
         """Fill the rows of one block (the whole image goes out in one assignment)."""
         a = block.start
         self.image = self.image.copy()
-        self.image[a:a + block.classes.shape[0]] = block.classes
+        rows = slice(a, a + block.classes.shape[0])
+        self.image[rows] = block.classes
+        self.impacts[rows], self.period[rows] = block.impacts, block.period
+        self.labels = block.labels
         self.rows_done = block.rows_done
         self.legend = legend_html(block.legend)
         self.source.data = {**self.source.data, "image": [self.image]}

@@ -158,7 +158,7 @@ def test_one_direction_fills_its_renderer_only(make_explorer, mode, d):
     filled = {k: len(getattr(view, a).data["omega"]) > 0
               for k, a in ((0, "source"), (1, "up_source"), (-1, "down_source"))}
     assert filled == {0: False, 1: d == 1, -1: d == -1}
-    assert not view.legend.visible
+    assert view.legend is not None and not view.legend.visible
 
 
 def test_tap_sets_the_swept_parameter(make_explorer):

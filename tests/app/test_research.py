@@ -5,6 +5,8 @@ the scene started at a tapped cell (its own simulation and classification) must 
 attractor the cell is coloured with; the period-1 fixed point at r = 0.8, omega = 2.62
 is checked in the core's tests against scipy.optimize.root.
 """
+import io
+
 import numpy as np
 import pytest
 from bokeh.events import Tap
@@ -22,7 +24,7 @@ def tap(view, x, y):
 
 def test_research_card_is_built_only_when_opened(make_explorer):
     e = make_explorer()
-    assert not e.research.built and len(e.research.card.objects) == 1
+    assert not e.research.built and len(e.research.card.objects) == 0
     e.research.card.collapsed = False           # opening computes the open tab (the map)
     assert e.research.built
     assert e.research_job.done.wait(120)
@@ -173,3 +175,63 @@ def test_refused_settings_show_the_cores_message(make_explorer):
     e.research_job.submit((BASINS, req))
     assert e.research.status[BASINS].object.startswith("not computed — ValueError")
     assert "x_range" in e.research.status[BASINS].object
+
+
+# -- CSV downloads ---------------------------------------------------------------------
+
+SETTING_LINES = ["m", "c", "k", "g", "r", "omega", "psi", "t_end", "t_record", "method"]
+
+
+def parse(buf):
+    """(settings block, header row, numeric rows) of a CSV download; pandas agrees."""
+    import pandas as pd
+    from app.downloads import read_header
+    text = buf.getvalue()
+    lines = text.splitlines()
+    body = [line for line in lines if not line.startswith("#")]
+    assert all(line.startswith("#") for line in lines[:len(lines) - len(body)])
+    head = body[0].split(",")
+    data = np.array([row.split(",") for row in body[1:]], dtype=float).reshape(-1, len(head))
+    frame = pd.read_csv(io.StringIO(text), comment="#")
+    assert list(frame.columns) == head and frame.shape == data.shape
+    return read_header(text), head, data
+
+
+def test_csv_headers_name_every_setting_and_parse(make_explorer):
+    import importlib.metadata
+    e = make_explorer(map_n="8", basins_n="10", bif_sweep="both", bif_min="2.5",
+                      bif_max="2.8", bif_n="7", method="rk45", c="0.07", **PAPER_R08)
+    e.compute_research(MAP)
+    e.compute_research(BASINS)
+    version = importlib.metadata.version("impact-explorer")
+    bif = parse(e.downloads.bifurcation_csv())
+    rmap = parse(e.downloads.regime_map_csv(e.research.views[MAP]))
+    bas = parse(e.downloads.basins_csv(e.research.views[BASINS]))
+    for got, _, _ in (bif, rmap, bas):
+        assert list(got)[:10] == SETTING_LINES and list(got)[-1] == "version"
+        assert got["version"] == version
+        assert {n: float(got[n]) for n in ("m", "c", "k", "g", "r", "omega", "t_end",
+                                           "t_record")} == {
+            "m": 1.0, "c": 0.07, "k": 1.0, "g": 0.0, "r": 0.8, "omega": 2.62,
+            "t_end": 500.0, "t_record": 250.0}
+        assert got["method"] == "exact"          # what the sweeps use, not the scene's rk45
+    got, head, data = bif
+    assert got["bif_sweep"] == "both" and got["bif_param"] == "omega"
+    assert (float(got["bif_min"]), float(got["bif_max"]), int(got["bif_n"])) == (2.5, 2.8, 7)
+    assert head == ["omega", "v", "t", "phase", "direction"]
+    assert set(data[:, 4]) == {1.0, -1.0}
+    got, head, data = rmap
+    assert head == ["omega", "r", "m", "n", "class"] and data.shape[0] == 64
+    assert (got["map_x"], got["map_y"], got["sweep"]) == ("omega", "r", "independent")
+    assert float(got["map_x_min"]) == 0.1 and float(got["map_y_max"]) == 1.0
+    for m, n, k in data[:, 2:5].astype(int):
+        motion = research.describe(int(m), int(n))
+        label = got[f"class {k}"]
+        assert label in (motion.label, motion.kind, "other periodic", "other")
+    got, head, data = bas
+    assert head == ["x0", "v0", "attractor"] and data.shape[0] == 100
+    assert float(got["phase"]) == 0.0 and int(got["basins_n"]) == 10
+    found = {int(a) for a in data[:, 2]} - {-1}
+    assert all(f"attractor {a}" in got for a in found)
+    assert any("1-impact period-1" in got[f"attractor {a}"] for a in found)
+    assert data[:, 0].min() >= float(got["x_min"]) and data[:, 0].max() <= float(got["x_max"])

@@ -1,5 +1,7 @@
 """The diagram in any parameter, in headless Chromium: switching the swept parameter and
 tapping the diagram. Helpers come from test_app_browser (same server fixture)."""
+import time
+
 from test_app_browser import JS, open_app, query, text
 
 #: Page position (CSS px) of data point (x, y) of a figure: the plot's view maps data to
@@ -20,7 +22,11 @@ def tap(page, figure: str, x: float, y: float) -> None:
 def diagram_ready(page, what: str) -> None:
     page.wait_for_function("() => ie.title('bifurcation_figure').includes('complete')",
                            timeout=30_000, polling=100)
-    status = text(page, "ie-diagram-status")
+    # the status pane's update may reach the page a message after the title's
+    deadline = time.monotonic() + 10
+    while not (status := text(page, "ie-diagram-status")).startswith("complete"):
+        assert time.monotonic() < deadline, status
+        page.wait_for_timeout(100)
     assert status.startswith("complete: " + what), status
 
 

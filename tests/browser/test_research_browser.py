@@ -1,9 +1,10 @@
 """The research card in headless Chromium: the regime map and the basins fill when their
 tab opens, and a tap on each changes the scene. Screenshots go to test-results/."""
 import time
+from pathlib import Path
 
 from playwright.sync_api import expect
-from test_app_browser import RESULTS, open_app, text
+from test_app_browser import RESULTS, open_app, query, text
 from test_diagram_browser import tap
 
 FILLED = """(name) => {
@@ -42,6 +43,13 @@ def test_regime_map_and_basins_fill_and_taps_change_the_scene(page, server):
     page.wait_for_timeout(300)
     page.locator(".ie-research").screenshot(path=str(RESULTS / "regime_map.png"))
 
+    with page.expect_download(timeout=15_000) as info:
+        page.locator(".ie-map-csv").get_by_text("CSV").click()
+    lines = Path(info.value.path()).read_text().splitlines()
+    assert lines[0].startswith("# m = ") and "# map_x = omega" in lines
+    body = [line for line in lines if not line.startswith("#")]
+    assert body[0] == "omega,r,m,n,class" and len(body) == 1 + 100 * 100
+
     before = disp_sum(page)
     tap(page, "regime_map_figure", 2.8, 0.6)
     page.wait_for_function("() => Math.abs(ie.model('bifurcation_marker').location - 2.8) < 0.03",
@@ -66,7 +74,7 @@ def test_regime_map_and_basins_fill_and_taps_change_the_scene(page, server):
     x_end = page.evaluate("ie.model('basins_figure').x_range.end")
     tap(page, "basins_figure", 0.5 * x_end, 0.3)
     page.wait_for_function("() => location.search.includes('x0=')", timeout=10_000)
-    x0 = float(page.locator(".ie-w-x0 input").first.input_value())
+    x0 = float(query(page)["x0"])          # (its box is in a card not opened)
     assert abs(x0 - 0.5 * x_end) < 0.05 * x_end, x0
     page.wait_for_function(f"() => ie.sum('displacement', 'x') !== {before}", timeout=10_000)
     start = page.evaluate("ie.model('basins_start').data_source.data.x[0]")
