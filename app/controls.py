@@ -15,10 +15,11 @@ import param
 
 from .panel_fixes import PromptFloatSlider
 from .scenes import SCENES
-from .settings import SETTINGS
+from .settings import ON_DIAGRAM, RESEARCH, SETTINGS
 
 SIDEBAR_WIDTH = 310
 STATUS_NAME = "bifurcation_status"
+STABILITY_NAME = "stability_readout"
 CAPTION = ("Paper defaults: m = 1, c = 0.05, k = 1, g = 0, r = 0.8, ω = 2. "
            "Pick a scene of the paper or move a slider.")
 PICK = "Pick a scene of the paper…"
@@ -26,6 +27,7 @@ CHANGED_NOTE = "\n\n*Settings changed since this scene was loaded.*"
 CSS = """
 .ie-badge {font-size: 16px;}
 .ie-badge b {color: #1f5fa8;}
+.ie-stability {font-size: 14px;}
 .ie-accuracy td, .ie-accuracy th {padding: 2px 6px; font-size: 12px; text-align: left;}
 """
 
@@ -63,6 +65,10 @@ def make_widget(settings, s):
                                               sizing_mode="stretch_width", margin=(0, 10))
         return box, pn.Column(box, slider, css_classes=css, sizing_mode="stretch_width")
     common = dict(label=s.label, sizing_mode="stretch_width", css_classes=css)
+    if s.widget == "checkbox":
+        box = pn.widgets.Checkbox.from_param(par, name=s.label, css_classes=css,
+                                             margin=(8, 10))
+        return box, box
     if s.widget == "select":
         select = pn.widgets.Select.from_param(par, description=s.doc, **common)
         return select, select
@@ -104,6 +110,9 @@ class Controls:
                                           sizing_mode="stretch_width")
         self.badge = pn.pane.HTML("", css_classes=["ie-badge"], sizing_mode="stretch_width",
                                   stylesheets=[CSS])
+        self.stability = NamedHTML("", model_name=STABILITY_NAME,
+                                   css_classes=["ie-stability"], stylesheets=[CSS],
+                                   sizing_mode="stretch_width")
         self.caption = pn.pane.Markdown(CAPTION, css_classes=["ie-caption"],
                                         sizing_mode="stretch_width")
         self.scene_picker = pn.widgets.Select(
@@ -148,28 +157,37 @@ class Controls:
         return out
 
     def _layout(self, views, downloads):
-        groups = list(dict.fromkeys(s.group for s in SETTINGS))
+        groups = [g for g in dict.fromkeys(s.group for s in SETTINGS)
+                  if g not in (RESEARCH, ON_DIAGRAM)]
         sidebar = pn.Column(
             *(_card(g, self._group(g), open_=i < 2) for i, g in enumerate(groups)),
             _card("Downloads", downloads.widgets),
             _card("Accuracy", [self.accuracy_button, self.accuracy_pane]),
             width=SIDEBAR_WIDTH)
         pane = dict(sizing_mode="stretch_width")
-        grid = pn.GridBox(*(pn.pane.Bokeh(v.figure, **pane) for v in views if not v.wide),
+        grid = pn.GridBox(*(pn.pane.Bokeh(v.figure, **pane) for v in views
+                            if not v.wide and v.figure is not None),
                           ncols=2, sizing_mode="stretch_width")
-        main = pn.Column(
+        main = self.main = pn.Column(
             pn.pane.Markdown("## Impact Explorer — forced oscillator with a rigid endstop",
                              margin=(0, 10)),
             self.message_pane,
             self.scene_picker,
             self.caption,
             self.badge,
+            self.stability,
             grid,
             self.progress,
             self.diagram_status,
-            *(pn.pane.Bokeh(v.figure, **pane) for v in views if v.wide),
+            *(self._items[s.name] for s in SETTINGS if s.group == ON_DIAGRAM),
+            *(pn.pane.Bokeh(v.figure, **pane) for v in views
+              if v.wide and v.figure is not None),
             sizing_mode="stretch_width")
         return pn.Row(sidebar, main, sizing_mode="stretch_width")
+
+    def add_research(self, card) -> None:
+        """The research card, last on the page (below the six main figures)."""
+        self.main.append(card)
 
     # -- what the session shows --------------------------------------------------------
 
@@ -194,6 +212,10 @@ class Controls:
             warn = f" <span style='color:#b35900'>⚠ {scene.message}</span>"
         self.badge.object = (f"Motion: <b>{scene.label}</b> · {scene.run.method} · computed "
                              f"in {scene.elapsed * 1e3:.2f} ms{warn}")
+
+    def show_stability(self, html: str | None) -> None:
+        """The stability readout (``stability_readout``); None while it is computed."""
+        self.stability.object = html or "Stability: computing…"
 
     def show_caption(self, text: str) -> None:
         self.caption.object = text

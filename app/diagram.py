@@ -1,5 +1,13 @@
 """The live bifurcation diagram: computed once per set of inputs, shared, streamed.
 
+The diagram sweeps ``Run.bif_param`` (any of omega, r, c, g, m, k) over
+``linspace(bif_min, bif_max, bif_n)`` in the sweep mode ``Run.bif_sweep``:
+``independent`` (every value from (x0, v0), streamed coarse-to-fine) or ``up``, ``down``,
+``both`` (continuation: each value starts where its neighbour ended). A continuation is
+one sequential chain per direction, so each direction arrives as one chunk; its work per
+value is scaled down so that a whole chain stays within WARM_MAX_STEPS and
+WARM_MAX_IMPACTS (values that hit the ceiling are counted and reported).
+
 A diagram depends only on ``Run.diagram_key()``. ``CACHE`` holds one ``SharedDiagram``
 per key, in flight or finished: a session that asks for a diagram someone else is
 computing follows that computation (the chunks so far arrive at once, the rest as they
@@ -28,6 +36,7 @@ import numpy as np
 
 import impactlib as il
 
+from .settings import SYMBOLS
 from .state import Run
 
 log = logging.getLogger(__name__)
@@ -44,6 +53,11 @@ DIAGRAM_WALL_TIME = 20.0
 DIAGRAM_MAX_STEPS_PER_500S = 50_000
 DIAGRAM_MAX_IMPACTS_PER_500S = 5_000
 MAX_CHUNK = 64
+#: Work ceilings of one continuation chain (all its values together): about 12 s of
+#: the costliest stepping and 9 s of impacts on this machine at worst; the paper's
+#: diagram at 400 values needs a tenth of that.
+WARM_MAX_STEPS = 8_000_000
+WARM_MAX_IMPACTS = 1_000_000
 #: Points of one omega value closer than this fraction of the largest |v| are drawn once
 #: (a period-1 orbit is one dot, not a hundred dots on top of each other).
 DRAW_RESOLUTION = 1e-3
@@ -57,8 +71,20 @@ CACHE_ITEMS = 128
 _POOL = ThreadPoolExecutor(max_workers=1, thread_name_prefix="impact-diagram")
 
 
-def omega_values(run: Run) -> np.ndarray:
+COLUMNS = ("omega", "v", "t", "phase", "direction")
+#: Columns with one entry per swept value (not per impact): the value, its largest
+#: Lyapunov exponent and the chain that ran it (0 independent, +1 up, -1 down).
+PER_VALUE = ("values", "lyapunov", "sweep")
+
+
+def sweep_values(run: Run) -> np.ndarray:
+    """The values of the swept parameter ``run.bif_param``."""
     return np.linspace(run.bif_min, run.bif_max, run.bif_n)
+
+
+def directions(run: Run) -> tuple[int, ...]:
+    """Chains of the sweep mode: (0,) independent, (1,) up, (-1,) down, (1, -1) both."""
+    return {"independent": (0,), "up": (1,), "down": (-1,), "both": (1, -1)}[run.bif_sweep]
 
 
 def chunk_values(values: np.ndarray, n_chunks: int = 4) -> list[np.ndarray]:
@@ -83,40 +109,66 @@ def drawn(omega: np.ndarray, v: np.ndarray) -> np.ndarray:
     return np.sort(first)
 
 
-def compute_chunk(run: Run, values: np.ndarray) -> dict:
-    """Impacts only (no dense output), exact method, independent starts, the core's
-    parallel sweep; at most MAX_IMPACTS_PER_VALUE impacts kept per value."""
+def compute_chunk(run: Run, values: np.ndarray, direction: int = 0) -> dict:
+    """Impacts only (no dense output), exact method, at most MAX_IMPACTS_PER_VALUE kept
+    per value. ``direction`` 0: independent starts (the core's parallel sweep); +1 / -1:
+    one continuation chain over ``values`` upwards / downwards.
+
+    The column ``omega`` holds the swept parameter's value whatever it is (the name
+    the diagram's data has always had; ``run.bif_param`` says which parameter it is).
+    The same runs carry the tangent dynamics: ``lyapunov`` is the largest Lyapunov
+    exponent of each of ``values`` (-inf where the motion sticks, NaN where undefined).
+    """
     scale = max(1.0, run.t_end / 500.0)
-    bif = il.bifurcation(run.params, "omega", values, t_end=run.t_end,
+    max_impacts = int(DIAGRAM_MAX_IMPACTS_PER_500S * scale)
+    max_steps = int(DIAGRAM_MAX_STEPS_PER_500S * scale)
+    if direction:
+        max_impacts = max(100, min(max_impacts, WARM_MAX_IMPACTS // values.size))
+        max_steps = max(1000, min(max_steps, WARM_MAX_STEPS // values.size))
+    bif = il.bifurcation(run.params, run.bif_param, values, t_end=run.t_end,
                          t_record=run.t_record, method="exact", x0=run.x0, v0=run.v0,
-                         warm_start=False, cap_per_value=MAX_IMPACTS_PER_VALUE,
-                         max_impacts=int(DIAGRAM_MAX_IMPACTS_PER_500S * scale),
-                         max_steps=int(DIAGRAM_MAX_STEPS_PER_500S * scale))
+                         warm_start={0: False, 1: "up", -1: "down"}[direction],
+                         cap_per_value=MAX_IMPACTS_PER_VALUE, max_impacts=max_impacts,
+                         max_steps=max_steps, lyapunov=True)
     status = np.asarray(bif.status)
     omega, v = np.asarray(bif.param, dtype=float), np.asarray(bif.v, dtype=float)
     return {"omega": omega, "v": v,
             "t": np.asarray(bif.t, dtype=float), "phase": np.asarray(bif.phase, dtype=float),
+            "direction": np.full(omega.size, direction, dtype=np.int8),
             "drawn": drawn(omega, v),
+            # per swept value: the largest Lyapunov exponent over the same window
+            "values": np.asarray(bif.values, dtype=float), "lyapunov": bif.lyapunov,
+            "sweep": np.full(values.size, direction, dtype=np.int8),
             # 1, 2: a work limit stopped the run; 3 only means more impacts than kept
             "partial": int(np.count_nonzero((status != 0) & (status != 3)))}
 
 
 def merged(parts: list[dict]) -> dict:
     """Several chunks as one (``drawn`` indices shifted to the joined arrays)."""
-    out = {c: np.concatenate([p[c] for p in parts]) for c in ("omega", "v", "t", "phase")}
+    out = {c: np.concatenate([p[c] for p in parts]) for c in (*COLUMNS, *PER_VALUE)}
     offsets = np.cumsum([0] + [p["omega"].size for p in parts[:-1]])
     out["drawn"] = np.concatenate([p["drawn"] + o for p, o in zip(parts, offsets)])
     return out
 
 
+def what(run: Run) -> str:
+    """'400 ω values' (and the sweep mode unless independent)."""
+    mode = {"independent": "", "up": ", swept up", "down": ", swept down",
+            "both": ", swept up and down"}[run.bif_sweep]
+    return f"{run.bif_n} {SYMBOLS[run.bif_param]} values{mode}"
+
+
 def status_text(run: Run, info: dict, recorded: int, drawn: int) -> tuple[str, str]:
     """(status line, figure title end) of a finished diagram of ``run``."""
-    note = f", {info['partial']} ω values stopped at a work limit" if info["partial"] else ""
+    sym = SYMBOLS[run.bif_param]
+    note = (f", {info['partial']} {sym} values stopped at a work limit"
+            if info["partial"] else "")
     if info["done"] < info["total"]:
+        where = ("spread over the range" if run.bif_sweep == "independent"
+                 else "the first direction only")
         return (f"stopped at the time limit ({DIAGRAM_WALL_TIME:g} s): {info['done']} of "
-                f"{info['total']} ω values, spread over the range{note}",
-                "partial (time limit)")
-    return (f"complete: {run.bif_n} ω values, {recorded} impacts recorded, {drawn} distinct "
+                f"{info['total']} {sym} values, {where}{note}", "partial (time limit)")
+    return (f"complete: {what(run)}, {recorded} impacts recorded, {drawn} distinct "
             f"points drawn, in {info['elapsed']:.2f} s{note}", "complete")
 
 
@@ -130,7 +182,11 @@ class SharedDiagram:
 
     def __init__(self, run: Run):
         self.run, self.key = run, run.diagram_key()
-        self.order = interleaved(omega_values(run))
+        self.directions = directions(run)
+        values = sweep_values(run)
+        # independent: interleaved chunks; continuation: one chain per direction
+        self.order = (interleaved(values) if self.directions == (0,)
+                      else np.tile(values, len(self.directions)))
         self.parts: list[dict] = []
         self.computed = self.partial = 0
         self.info: dict | None = None        # set when finished
@@ -181,14 +237,18 @@ class SharedDiagram:
         if self.abandoned and CACHE.drop_abandoned(self):
             return
         n = self.order.size
-        if self.computed == 0:
+        direction = 0
+        if self.directions != (0,):
+            size = self.run.bif_n
+            direction = self.directions[self.computed // size]
+        elif self.computed == 0:
             size = min(FIRST_CHUNK, n)
         else:
             rate = self.computed / max(time.perf_counter() - self._t0, 1e-6)
             size = int(min(max(1, rate * CHUNK_SECONDS), max(1, n // 4), MAX_CHUNK))
         values = self.order[self.computed: self.computed + size]
         try:
-            part = compute_chunk(self.run, np.sort(values))
+            part = compute_chunk(self.run, np.sort(values), direction)
         except Exception as exc:   # report, never kill the worker, no traceback in the log
             log.warning("bifurcation diagram failed: %s: %s", type(exc).__name__, exc)
             part, error = None, f"{type(exc).__name__}: {exc}"

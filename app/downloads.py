@@ -1,18 +1,71 @@
-"""CSV downloads of what a session shows: impacts, Poincaré points, bifurcation diagram."""
+"""CSV downloads of what a session shows: impacts, Poincaré points, bifurcation diagram,
+regime map, basins.
+
+The diagram, regime map and basins files start with ``# name = value`` lines: the
+settings they were computed with under their URL names (m, c, k, g, r, omega, psi,
+t_end, t_record, method), what the view adds (start, sweep mode, grid, legend) and the
+``version`` of the package, then one header row, then the rows.
+``pandas.read_csv(f, comment="#")`` or ``numpy.loadtxt(f, delimiter=",", comments="#",
+skiprows=1)`` read them.
+"""
 from __future__ import annotations
 
 import io
+from importlib.metadata import PackageNotFoundError, version
 
 import numpy as np
 import panel as pn
 
+from .research import attractor_text
+from .settings import SWEEP_RANGES
+from .state import to_query
 
-def to_csv(columns: dict) -> io.StringIO:
-    """A CSV file (header line, then one row per sample) of equally long columns."""
+#: Settings written at the top of every CSV file, by URL name.
+HEADER_NAMES = ("m", "c", "k", "g", "r", "omega", "psi", "t_end", "t_record", "method")
+
+
+def package_version() -> str:
+    try:
+        return version("impact-explorer")
+    except PackageNotFoundError:
+        return "unknown"
+
+
+def _text(value) -> str:
+    return value if isinstance(value, str) else "" if value is None else repr(value)
+
+
+def header(run, extra: dict | None = None) -> str:
+    """``# name = value`` lines: the settings of ``run`` (URL names and texts), then
+    ``extra`` (replacing a setting of the same name in place, e.g. the method a sweep
+    really used), then ``version``."""
+    q = to_query(run)
+    values = {n: q.get(n, "") for n in HEADER_NAMES}
+    values.update({k: _text(v) for k, v in (extra or {}).items()})
+    values["version"] = package_version()
+    return "".join(f"# {n} = {v}\n" for n, v in values.items())
+
+
+def read_header(text: str) -> dict:
+    """The ``# name = value`` lines at the top of ``text`` as a dict of strings."""
+    out = {}
+    for line in text.splitlines():
+        if not line.startswith("#"):
+            break
+        name, _, value = line[1:].partition("=")
+        out[name.strip()] = value.strip()
+    return out
+
+
+def to_csv(columns: dict, run=None, extra: dict | None = None) -> io.StringIO:
+    """A CSV file (the settings of ``run`` and ``extra`` as comment lines, a header
+    line, then one row per sample) of equally long columns."""
     names = list(columns)
     data = np.column_stack([np.asarray(columns[n], dtype=float) for n in names]) \
         if names and len(columns[names[0]]) else np.zeros((0, len(names)))
     buf = io.StringIO()
+    if run is not None:
+        buf.write(header(run, extra))
     buf.write(",".join(names) + "\n")
     np.savetxt(buf, data, delimiter=",", fmt="%.10g")
     buf.seek(0)
@@ -52,4 +105,57 @@ class Downloads:
 
     def bifurcation_csv(self) -> io.StringIO:
         self._name(2, "bifurcation")
-        return to_csv(self.session.bifurcation.table())
+        view = self.session.bifurcation
+        table = view.table()
+        run = view.run
+        # the value column is named after the swept parameter; direction only when
+        # the sweep has one (+1 up, -1 down)
+        cols = {run.bif_param if run is not None else "omega": table["omega"]}
+        cols.update((c, table[c]) for c in ("v", "t", "phase"))
+        if run is not None and run.bif_sweep != "independent":
+            cols["direction"] = table["direction"]
+        if run is None:
+            return to_csv(cols)
+        return to_csv(cols, run, {"method": "exact", "x0": run.x0, "v0": run.v0,
+                                  "bif_param": run.bif_param, "bif_sweep": run.bif_sweep,
+                                  "bif_min": run.bif_min, "bif_max": run.bif_max,
+                                  "bif_n": run.bif_n})
+
+    def regime_map_csv(self, view) -> io.StringIO:
+        """One row per computed cell: the two parameters, classify's (m, n) codes and
+        the class drawn (its label in the header)."""
+        req = view.request
+        if req is None:
+            return io.StringIO("# nothing computed yet\n")
+        run = req.run
+        done = ~np.isnan(view.image)
+        iy, ix = np.nonzero(done)
+        extra = {"method": "exact", "x0": run.x0, "v0": run.v0, "sweep": "independent",
+                 "map_x": req.name_x, "map_y": req.name_y, "map_n": req.n}
+        for axis, name in (("x", req.name_x), ("y", req.name_y)):
+            lo, hi = SWEEP_RANGES[name]
+            extra[f"map_{axis}_min"], extra[f"map_{axis}_max"] = lo, hi
+        extra["rows_done"] = f"{view.rows_done} of {req.n}"
+        for k, label in enumerate(view.labels):
+            extra[f"class {k}"] = label
+        cols = {req.name_x: req.values_x[ix], req.name_y: req.values_y[iy],
+                "m": view.impacts[iy, ix], "n": view.period[iy, ix],
+                "class": view.image[iy, ix]}
+        return to_csv(cols, run, extra)
+
+    def basins_csv(self, view) -> io.StringIO:
+        """One row per computed start: x0, v0 and the attractor it settles on (-1
+        undecided; the attractors in the header)."""
+        req = view.request
+        if req is None:
+            return io.StringIO("# nothing computed yet\n")
+        run = req.run
+        iv, ix = np.nonzero(~np.isnan(view.image))
+        extra = {"method": "exact", "sweep": "independent (every start on its own)",
+                 "phase": 0.0, "x_min": req.x_range[0], "x_max": req.x_range[1],
+                 "v_min": req.v_range[0], "v_max": req.v_range[1], "basins_n": req.n,
+                 "rows_done": f"{view.rows_done} of {req.n}"}
+        for k, att in enumerate(view.attractors):
+            extra[f"attractor {k}"] = attractor_text(att)
+        cols = {"x0": view.xs[ix], "v0": view.vs[iv], "attractor": view.image[iv, ix] - 1}
+        return to_csv(cols, run, extra)

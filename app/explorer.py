@@ -4,7 +4,10 @@ A settings change is validated into a ``Run``; what it changes decides the work:
 
 - the trajectory (``Run.scene_key``) or psi: the scene job (scene views, badge, marker;
   a psi change alone re-samples the Poincaré section only);
-- ``Run.diagram_key``: the diagram job restarts; omega alone only moves its marker.
+- ``Run.diagram_key``: the diagram job restarts; omega alone only moves its marker;
+- ``stability.readout_key`` (physics, start, window): the stability readout job;
+- ``branches`` on, or a finished diagram while it is on: the branch job (seeded from the
+  diagram's chunks; cancelled when the diagram restarts or the overlay is switched off).
 
 Each job is an ``app.jobs.Job`` (latest request wins, work off the event loop, results
 back on it); each view gets the results it shows through its hooks (app.views.base).
@@ -18,13 +21,14 @@ from concurrent.futures import ThreadPoolExecutor
 
 import panel as pn
 
-from . import accuracy, compute, diagram, state
+from . import accuracy, branches, compute, diagram, research, stability, state
 from .controls import Controls
 from .downloads import Downloads
 from .jobs import Job, SessionLoop, session_doc
 from .panel_fixes import release_links
+from .research_panel import MAP, ResearchPanel
 from .scenes import BY_KEY
-from .settings import QUERY_NAMES, Settings
+from .settings import QUERY_NAMES, SYMBOLS, Settings
 from .views import VIEWS
 from .views._figure import share_helpers
 
@@ -32,6 +36,11 @@ log = logging.getLogger(__name__)
 
 _SCENE_POOL = ThreadPoolExecutor(max_workers=2, thread_name_prefix="impact-scene")
 _ACCURACY_POOL = ThreadPoolExecutor(max_workers=1, thread_name_prefix="impact-accuracy")
+_STABILITY_POOL = ThreadPoolExecutor(max_workers=1, thread_name_prefix="impact-stability")
+_BRANCH_POOL = ThreadPoolExecutor(max_workers=1, thread_name_prefix="impact-branches")
+#: Threads that drive regime maps and basins (each drives the core's own pool): at most
+#: this many sessions compute one at a time, the others wait their turn.
+_RESEARCH_POOL = ThreadPoolExecutor(max_workers=2, thread_name_prefix="impact-research")
 
 
 class Explorer(pn.viewable.Viewer):
@@ -52,7 +61,10 @@ class Explorer(pn.viewable.Viewer):
         self.views = [cls() for cls in VIEWS]
         for view in self.views:
             setattr(self, view.key, view)
-        share_helpers([v.figure for v in self.views])
+            view.connect(self.pick)
+        for view in self.views:
+            view.link({v.key: v for v in self.views})
+        share_helpers([v.figure for v in self.views if v.figure is not None])
         self.downloads = Downloads(self)
         self.controls = c = Controls(self.settings, self.views, on_scene=self.load_scene,
                                      on_accuracy=self._on_accuracy, downloads=self.downloads)
@@ -66,6 +78,23 @@ class Explorer(pn.viewable.Viewer):
             "accuracy", lambda run, t: accuracy.to_html(accuracy.compare_methods(run)),
             dispatch, pool=None if doc is None else _ACCURACY_POOL,
             on_result=self._accuracy_done)
+        self.readout = None               # the stability readout shown (stability.Readout)
+        self.stability_job = Job("stability", lambda run, t: stability.readout(run), dispatch,
+                                 pool=None if doc is None else _STABILITY_POOL,
+                                 on_result=self._stability_done)
+        self._parts: list[dict] = []      # the diagram's chunks so far (branch seeds)
+        self._diagram_end = None          # "complete", "partial (time limit)", "failed"
+        self.branch_job = Job("branches",
+                              lambda req, t: branches.branches_for(req[0], req[1], t),
+                              dispatch, pool=None if doc is None else _BRANCH_POOL,
+                              on_result=self._branches_done)
+        # one heavy job per session: the regime map or the basins, the newest request wins
+        self.research_job = Job("research", self._research_work, dispatch,
+                                pool=None if doc is None else _RESEARCH_POOL)
+        self.research = ResearchPanel(self.widgets, compute=self.compute_research,
+                                      cancel=self.cancel_research, pick=self.pick,
+                                      downloads=self.downloads)
+        self.controls.add_research(self.research.card)
         self.settings.param.watch(self._on_settings, list(QUERY_NAMES))
         self._apply()
         if errors:
@@ -88,7 +117,8 @@ class Explorer(pn.viewable.Viewer):
 
     def _on_session_destroyed(self, session_context) -> None:
         """The tab is gone: stop its jobs and let the whole session be collected."""
-        for job in (self.scene_job, self.runner, self.accuracy_job):
+        for job in (self.scene_job, self.runner, self.accuracy_job, self.stability_job,
+                    self.branch_job, self.research_job):
             job.cancel()
         self._loop.close()
         self.release_links()
@@ -106,9 +136,20 @@ class Explorer(pn.viewable.Viewer):
         self._scene_run = self._wanted
         self._mark_caption()
 
+    def pick(self, **values) -> None:
+        """Settings chosen by a gesture on a view (a tap on the diagram, the map...)."""
+        self.settings.param.update(**values)
+
     def _on_settings(self, *events) -> None:
         if not self._restoring:
             self._keep_message = False
+        changed = {e.name for e in events}
+        st = self.settings
+        if ("bif_param" in changed and not changed & {"bif_min", "bif_max"}
+                and (st.bif_min, st.bif_max) != (None, None)):
+            # another parameter: its own default range (the nested update applies it)
+            self.settings.param.update(bif_min=None, bif_max=None)
+            return
         try:
             with pn.io.hold(self._doc):   # one websocket message for all view updates
                 self._apply()
@@ -124,7 +165,13 @@ class Explorer(pn.viewable.Viewer):
             return
         if self._wanted is None or run.diagram_key() != self._wanted.diagram_key():
             self._restart_diagram(run)
-        self._wanted = run
+        if self._wanted is None or (stability.readout_key(run)
+                                    != stability.readout_key(self._wanted)):
+            self.controls.show_stability(None)
+            self.stability_job.submit(run)
+        previous, self._wanted = self._wanted, run
+        if previous is None or run.branches != previous.branches:
+            self._update_branches()
         self.scene_job.submit(run)
 
     def _on_load(self) -> None:
@@ -137,14 +184,79 @@ class Explorer(pn.viewable.Viewer):
 
     def _restart_diagram(self, run) -> None:
         self._diagram_run, self._drawn, self._recorded = run, 0, 0
+        self._parts, self._diagram_end = [], None
+        if run.branches:
+            self.branch_job.cancel()
+            for view in self.views:
+                view.show_branches("waiting for the diagram")
         for view in self.views:
             view.diagram_started(run)
-        self.controls.show_diagram(f"computing {run.bif_n} ω values…", 0)
+        self.controls.show_diagram(f"computing {diagram.what(run)}…", 0)
         if self._loaded:
             self.runner.submit(run)
 
+    def _update_branches(self) -> None:
+        """Branch overlay: off, waiting for the diagram, or computed from its chunks."""
+        run = self._wanted
+        if not run.branches:
+            self.branch_job.cancel()
+            for view in self.views:
+                view.show_branches(None)
+            return
+        ready = self._diagram_end not in (None, "failed") and self._parts
+        text = ("continuing the orbits the diagram found…" if ready else
+                "waiting for the diagram" if self._diagram_end is None else
+                "no diagram to start from")
+        for view in self.views:
+            view.show_branches(text)
+        if ready:
+            self.branch_job.submit((self._diagram_run, diagram.merged(self._parts)))
+
     def _follow_diagram(self, run, ticket) -> None:
         diagram.follow(run, ticket, self._on_chunk, self._on_done, self._on_diagram_error)
+
+    def compute_research(self, kind: str) -> None:
+        """Compute the regime map (``MAP``) or the basins (``BASINS``) of the current
+        settings; supersedes the one under way."""
+        run = self._wanted
+        if run is None:
+            return
+        if not self.research.built:
+            self.research.build()
+        if kind == MAP:
+            request = research.map_request(run)
+        else:
+            shown = self.scene.trajectory if self.scene is not None and \
+                self.scene.run.params == run.params else None
+            request = research.BasinsRequest(run, *research.basins_window(run, shown),
+                                             run.basins_n)
+        self.research.started(kind, request)
+        self.research_job.submit((kind, request))
+
+    def cancel_research(self) -> None:
+        self.research_job.cancel()
+        self.research.cancelled()
+
+    def _research_work(self, job, ticket) -> None:
+        """Stream the blocks of a regime map or basins picture to the research panel."""
+        kind, request = job
+        block = None
+        try:
+            blocks = (research.map_rows(request) if kind == MAP
+                      else research.basins_rows(request))
+            try:
+                for block in blocks:
+                    ticket.send(self.research.rows, kind, block)
+                    if not ticket.live:       # before the next block is computed
+                        break
+            finally:
+                blocks.close()
+        except Exception as exc:     # a message on the view, one log line, no traceback
+            log.warning("%s failed: %s: %s", kind, type(exc).__name__, exc)
+            ticket.send(self.research.failed, kind, f"{type(exc).__name__}: {exc}")
+        else:
+            ticket.send(self.research.finished, kind, block)
+        ticket.finish()
 
     def _on_accuracy(self) -> None:
         self.controls.show_accuracy(None)
@@ -172,6 +284,7 @@ class Explorer(pn.viewable.Viewer):
         if scene is not self.scene:
             for view in self.views:
                 view.show_scene(scene)
+            self.research.show_scene(scene)
             self.controls.show_badge(scene)
         if section is not self.section:
             for view in self.views:
@@ -181,27 +294,49 @@ class Explorer(pn.viewable.Viewer):
         self._write_url()
 
     def _on_chunk(self, part: dict, done: int, total: int) -> None:
+        self._parts.append(part)
         self._drawn += len(part["drawn"])
         self._recorded += len(part["omega"])
         for view in self.views:
             view.diagram_chunk(part)
-        self.controls.show_diagram(f"computing… {done}/{total} ω values", done, total)
+        self.controls.show_diagram(f"computing… {done}/{total} "
+                                   f"{SYMBOLS[self._diagram_run.bif_param]} values", done, total)
 
     def _on_done(self, info: dict) -> None:
         text, end = diagram.status_text(self._diagram_run, info, self._recorded, self._drawn)
         self.controls.show_diagram(text, info["done"], info["total"])
         for view in self.views:
             view.diagram_finished(end)
+        self._diagram_end = end
+        if self._wanted.branches:
+            self._update_branches()
 
     def _on_diagram_error(self, text: str) -> None:
         self.controls.show_diagram(f"diagram failed: {text}")
         for view in self.views:
             view.diagram_finished("failed")
+        self._diagram_end = "failed"
+        if self._wanted.branches:
+            self._update_branches()
 
     def _accuracy_done(self, run, result) -> None:
         if isinstance(result, Exception):
             result = f"accuracy failed: {type(result).__name__}: {result}"
         self.controls.show_accuracy(result)
+
+    def _stability_done(self, run, result) -> None:
+        if isinstance(result, Exception):     # never raise into Panel
+            log.warning("stability readout failed: %s: %s", type(result).__name__, result)
+            result = stability.Readout("failed", f"no readout: {type(result).__name__}")
+        self.readout = result
+        self.controls.show_stability(stability.to_html(result))
+
+    def _branches_done(self, request, result) -> None:
+        if isinstance(result, Exception):     # never raise into Panel
+            log.warning("branches failed: %s: %s", type(result).__name__, result)
+            result = f"failed: {type(result).__name__}: {result}"
+        for view in self.views:
+            view.show_branches(result)
 
     def _mark_caption(self) -> None:
         if self._scene_run is not None and self.run is not None:

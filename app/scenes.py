@@ -11,7 +11,8 @@ import dataclasses
 
 BASE = {"m": 1.0, "c": 0.05, "k": 1.0, "g": 0.0, "r": 0.8, "omega": 2.0, "psi": 0.0,
         "t_end": 500.0, "t_record": 250.0, "x0": None, "v0": 0.0, "method": "exact",
-        "bif_min": 0.1, "bif_max": 5.0, "bif_n": 400}
+        "bif_param": "omega", "bif_sweep": "independent", "bif_min": 0.1,
+        "bif_max": 5.0, "bif_n": 400}
 
 
 @dataclasses.dataclass(frozen=True)

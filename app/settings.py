@@ -5,7 +5,14 @@ help text, the widget that edits it, and which results depend on it:
 
 - ``scene``: the trajectory, i.e. the four scene views (and the diagram marker);
 - ``section``: the Poincaré map only;
-- ``diagram``: the bifurcation diagram.
+- ``diagram``: the bifurcation diagram (except the parameter it sweeps, which only moves
+  its marker; see ``state.Run.diagram_key``).
+
+Settings of the research views (group ``RESEARCH``: regime map, basins) affect nothing
+that is computed automatically: those views compute on demand.
+
+A setting that affects none of them switches an extra result on or off (``branches``:
+the branch overlay, computed from the finished diagram; a ``flag``, 1 or 0 in the URL).
 
 Derived here: the ``Settings`` class (one ``param.Parameterized`` holding what the user
 typed, valid or not), ``QUERY_NAMES``, ``SCENE_FIELDS``, ``SECTION_FIELDS``,
@@ -28,8 +35,28 @@ import impactlib as il
 T_END_MAX = 20_000.0
 BIF_N_MAX = 2_000
 OMEGA_MAX = 1_000.0
+#: Cells per side of the regime map and of the basins picture.
+MAP_N_MAX = 300
+BASINS_N_MAX = 200
+
+#: Parameters a diagram or a regime map can sweep (il.Params fields), and the range
+#: swept when none is given: the paper's for omega (Fig. 3) and r (Fig. 3 a-f), around
+#: the paper's values for the others.
+SWEEPABLE = ("omega", "r", "c", "g", "m", "k")
+SWEEP_RANGES = {"omega": (0.1, 5.0), "r": (0.0, 1.0), "c": (0.0, 0.5), "g": (-1.0, 1.0),
+                "m": (0.25, 4.0), "k": (0.0, 4.0)}
+#: Diagram sweep modes (URL ``bif_sweep``) -> ``il.bifurcation(warm_start=)``.
+SWEEP_MODES = {"independent": False, "up": "up", "down": "down", "both": "both"}
+#: Symbols and axis labels of the sweepable parameters.
+SYMBOLS = {"omega": "ω", "r": "r", "c": "c", "g": "g", "m": "m", "k": "k"}
+AXIS_LABELS = {"omega": "driving frequency ω (rad/s)", "r": "restitution r",
+               "c": "damping c", "g": "endstop gap g", "m": "mass m", "k": "stiffness k"}
 
 SCENE, SECTION, DIAGRAM = "scene", "section", "diagram"
+#: Group of the research settings: shown in the research card, not in the sidebar.
+RESEARCH = "Research"
+#: Group of the settings shown above the diagram (not in the sidebar): its overlays.
+ON_DIAGRAM = "On the diagram"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -40,8 +67,8 @@ class Setting:
     doc: str
     affects: frozenset            # results that depend on it (SCENE, SECTION, DIAGRAM)
     group: str                    # sidebar card
-    widget: str = "input"         # "slider" | "input" | "select"
-    kind: str = "number"          # "number" | "integer" | "choice"
+    widget: str = "input"         # "slider" | "input" | "select" | "checkbox"
+    kind: str = "number"          # "number" | "integer" | "choice" | "flag" (on/off)
     lo: float | None = None       # valid range; None: unbounded
     hi: float | None = None
     lo_open: bool = False
@@ -87,7 +114,8 @@ _EVERYTHING = frozenset({SCENE, SECTION, DIAGRAM})
 #: k=1, g=0, r=0.8, omega=2, integrated to 500 s with the first 250 s discarded.
 SETTINGS: tuple[Setting, ...] = (
     _physical("omega", "ω  forcing frequency", 2.0,
-              "Driving frequency ω of cos(ωτ) in rad/s; period T = 2π/ω.", diagram=frozenset(),
+              "Driving frequency ω of cos(ωτ) in rad/s; period T = 2π/ω.",
+              diagram=frozenset({DIAGRAM}),
               hi=OMEGA_MAX, widget="slider", soft=(0.05, 6.0), step=0.01, fmt="0.000"),
     _physical("r", "r  restitution", 0.8,
               "Coefficient of restitution: ẋ(τ+) = −r ẋ(τ−) at the wall, 0 ≤ r ≤ 1.",
@@ -133,19 +161,50 @@ SETTINGS: tuple[Setting, ...] = (
     Setting("atol", "rk45 atol", 1e-9, "Absolute tolerance of the rk45 method (> 0).",
             _TRAJECTORY, "Time window, start, method", lo=0.0, lo_open=True,
             fmt="0.[000000000000]", half=True, method="rk45"),
-    Setting("bif_min", "diagram ω from", 0.1, "Lowest ω of the bifurcation diagram (> 0).",
-            frozenset({DIAGRAM}), "Bifurcation diagram range", lo=0.0, lo_open=True, half=True),
-    Setting("bif_max", "diagram ω to", 5.0, "Highest ω of the bifurcation diagram.",
-            frozenset({DIAGRAM}), "Bifurcation diagram range", hi=OMEGA_MAX, half=True),
+    Setting("bif_param", "diagram parameter", "omega",
+            "The parameter the bifurcation diagram sweeps (the others stay as set).",
+            frozenset({DIAGRAM}), "Bifurcation diagram range", widget="select",
+            kind="choice", choices=SWEEPABLE),
+    Setting("bif_sweep", "sweep mode", "independent",
+            "independent: every value starts from (x₀, v₀); up / down: each value starts "
+            "where the previous (lower / higher) one ended, which shows hysteresis; both: "
+            "up and down in two colours.", frozenset({DIAGRAM}), "Bifurcation diagram range",
+            widget="select", kind="choice", choices=tuple(SWEEP_MODES)),
+    Setting("bif_min", "diagram from", 0.1,
+            "Lowest value of the swept parameter; empty: the default range of that "
+            "parameter.", frozenset({DIAGRAM}), "Bifurcation diagram range", half=True,
+            optional=True),
+    Setting("bif_max", "diagram to", 5.0,
+            "Highest value of the swept parameter; empty: the default range of that "
+            "parameter.", frozenset({DIAGRAM}), "Bifurcation diagram range", half=True,
+            optional=True),
     Setting("bif_n", "diagram values", 400,
-            f"Number of ω values in the diagram (2 … {BIF_N_MAX}).", frozenset({DIAGRAM}),
+            f"Number of values in the diagram (2 … {BIF_N_MAX}).", frozenset({DIAGRAM}),
             "Bifurcation diagram range", kind="integer", lo=2, hi=BIF_N_MAX),
+    Setting("branches", "periodic branches on the diagram", False,
+            "Continue the periodic orbits the diagram finds over its range: stable parts "
+            "solid, unstable dashed, bifurcations and grazings marked (URL: branches=1).",
+            frozenset(), ON_DIAGRAM, widget="checkbox", kind="flag"),
+    Setting("map_x", "regime map x", "omega", "Parameter along the regime map's x axis.",
+            frozenset(), RESEARCH, widget="select", kind="choice", choices=SWEEPABLE,
+            half=True),
+    Setting("map_y", "regime map y", "r", "Parameter along the regime map's y axis.",
+            frozenset(), RESEARCH, widget="select", kind="choice", choices=SWEEPABLE,
+            half=True),
+    Setting("map_n", "regime map cells per side", 100,
+            f"Grid of the regime map: n × n cells (2 … {MAP_N_MAX}).", frozenset(), RESEARCH,
+            kind="integer", lo=2, hi=MAP_N_MAX, half=True),
+    Setting("basins_n", "basins cells per side", 100,
+            f"Grid of the basins picture: n × n starts (2 … {BASINS_N_MAX}).", frozenset(),
+            RESEARCH, kind="integer", lo=2, hi=BASINS_N_MAX, half=True),
 )
 
 BY_NAME = {s.name: s for s in SETTINGS}
 #: Every URL query name, in the order of SETTINGS.
 QUERY_NAMES = tuple(s.name for s in SETTINGS)
-NUMBER_FIELDS = tuple(s.name for s in SETTINGS if s.kind != "choice")
+NUMBER_FIELDS = tuple(s.name for s in SETTINGS if s.kind not in ("choice", "flag"))
+FLAG_FIELDS = tuple(s.name for s in SETTINGS if s.kind == "flag")
+CHOICE_FIELDS = tuple(s.name for s in SETTINGS if s.kind == "choice")
 SCENE_FIELDS = frozenset(s.name for s in SETTINGS if SCENE in s.affects)
 SECTION_FIELDS = frozenset(s.name for s in SETTINGS if SECTION in s.affects)
 DIAGRAM_FIELDS = frozenset(s.name for s in SETTINGS if DIAGRAM in s.affects)
@@ -170,6 +229,8 @@ def _parameter(s: Setting) -> param.Parameter:
     common = dict(label=s.label, doc=s.doc)
     if s.kind == "choice":
         return param.Selector(default=s.default, objects=list(s.choices), **common)
+    if s.kind == "flag":
+        return param.Boolean(s.default, **common)
     cls = param.Integer if s.kind == "integer" else param.Number
     extra = {"softbounds": s.soft} if s.soft else {}
     if s.step is not None:

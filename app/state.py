@@ -18,8 +18,13 @@ from collections.abc import Mapping
 
 import impactlib as il
 
-from .settings import (BY_NAME, DIAGRAM_FIELDS, METHODS, NUMBER_FIELDS, QUERY_NAMES,
-                       RUN_FIELDS, SCENE_FIELDS, SETTINGS, Settings)
+from .settings import (BY_NAME, CHOICE_FIELDS, DIAGRAM_FIELDS, FLAG_FIELDS, METHODS,
+                       NUMBER_FIELDS, OMEGA_MAX, QUERY_NAMES, RUN_FIELDS, SCENE_FIELDS,
+                       SETTINGS, SWEEP_RANGES, SYMBOLS, Settings)
+
+#: How a flag may be spelled in the URL.
+FLAG_TEXT = {"1": True, "true": True, "on": True, "yes": True,
+             "0": False, "false": False, "off": False, "no": False, "": False}
 
 __all__ = ["METHODS", "QUERY_NAMES", "Run", "Settings", "defaults", "initial_settings",
            "parse_query", "snapshot", "to_query", "validate"]
@@ -56,8 +61,10 @@ def _scene_key(self) -> tuple:
 
 
 def _diagram_key(self) -> tuple:
-    """What the bifurcation diagram depends on (omega only moves its marker)."""
-    return _key(self, DIAGRAM_FIELDS)
+    """What the bifurcation diagram depends on: everything in DIAGRAM_FIELDS (the swept
+    parameter's name and the sweep mode included) but the swept parameter's current
+    value, which only moves the marker."""
+    return _key(self, DIAGRAM_FIELDS - {self.bif_param})
 
 
 def _field(name: str) -> str:
@@ -111,9 +118,18 @@ def validate(values: Mapping) -> Run:
             clean[name] = float(v)          # still usable by the checks between fields
         else:
             clean[name] = float(v)
-    method = values.get("method")
-    if method not in METHODS:
-        errors.append(f"method: {_short(method)} is not one of {', '.join(METHODS)}")
+    for name in FLAG_FIELDS:
+        v = values.get(name, False)
+        if isinstance(v, bool):
+            clean[name] = v
+        else:
+            errors.append(f"{name}: {_short(v)} is not on or off")
+    for name in CHOICE_FIELDS:
+        choices, v = BY_NAME[name].choices, values.get(name)
+        if v in choices:
+            clean[name] = v
+        else:
+            errors.append(f"{name}: {_short(v)} is not one of {', '.join(choices)}")
 
     def need(cond: bool, field: str, text: str) -> None:
         if field in clean and not cond and not any(e.startswith(field + ":") for e in errors):
@@ -122,9 +138,10 @@ def validate(values: Mapping) -> Run:
     if "t_end" in clean:
         need(0 <= clean.get("t_record", 0) < clean["t_end"], "t_record",
              "must be ≥ 0 and less than the total time")
-    if "bif_min" in clean:
-        need(clean.get("bif_max", math.inf) > clean["bif_min"], "bif_max",
-             "must be greater than the lowest ω")
+    _check_sweep_range(clean, errors)
+    if "map_x" in clean and "map_y" in clean:
+        need(clean["map_x"] != clean["map_y"], "map_y",
+             "must be another parameter than map_x")
     if clean.get("x0") is not None and clean.get("g") is not None:
         need(clean["x0"] >= clean["g"], "x0", "must be ≥ g (the mass starts on the free side)")
     params = None
@@ -136,9 +153,35 @@ def validate(values: Mapping) -> Run:
             errors.append(html.escape(str(exc)))
     if errors or params is None:
         raise ValueError("; ".join(errors) or "invalid settings")
-    rest = {_field(n): clean[n] if n != "method" else method for n in RUN_FIELDS}
-    rest["bif_n"] = int(rest["bif_n"])
+    rest = {_field(n): clean[n] for n in RUN_FIELDS}
+    for name in ("bif_n", "map_n", "basins_n"):
+        rest[name] = int(rest[name])
     return Run(params=params, **rest)
+
+
+def _check_sweep_range(clean: dict, errors: list) -> None:
+    """Resolve an empty diagram range to the swept parameter's default range and check
+    both ends against that parameter's physical range (messages name bif_min/bif_max)."""
+    name = clean.get("bif_param")
+    if name is None or any(e.startswith(("bif_min:", "bif_max:")) for e in errors):
+        return
+    lo_default, hi_default = SWEEP_RANGES[name]
+    lo = clean["bif_min"] if clean.get("bif_min") is not None else lo_default
+    hi = clean["bif_max"] if clean.get("bif_max") is not None else hi_default
+    clean["bif_min"], clean["bif_max"] = lo, hi
+    f, sym = il.FIELDS[name], SYMBOLS[name]
+    top = OMEGA_MAX if name == "omega" else f.hi
+    for field, v in (("bif_min", lo), ("bif_max", hi)):
+        low = f.lo is not None and (v <= f.lo if f.lo_open else v < f.lo)
+        if low or (top is not None and v > top):
+            left = "(-∞" if f.lo is None else f"{'(' if f.lo_open else '['}{f.lo:g}"
+            span = f"{left}, {'∞)' if top is None else f'{top:g}]'}"
+            errors.append(f"{field}: {v:g} is outside the range of {sym}, {span}")
+    if not any(e.startswith(("bif_min:", "bif_max:")) for e in errors) and not hi > lo:
+        errors.append(f"bif_max: must be greater than the lowest {sym} ({lo:g})")
+    if name == "g" and clean.get("x0") is not None and clean["x0"] < hi:
+        errors.append(f"x0: must be ≥ the largest g of the diagram ({hi:g}), or empty "
+                      "(at the wall)")
 
 
 # -- URL ---------------------------------------------------------------------------
@@ -170,6 +213,12 @@ def parse_query(args: Mapping[str, object]) -> tuple[dict, list[str]]:
             else:
                 errors.append(f"{name}: {_short(text)} is not one of {', '.join(s.choices)}")
             continue
+        if s.kind == "flag":
+            if text.lower() in FLAG_TEXT:
+                values[name] = FLAG_TEXT[text.lower()]
+            else:
+                errors.append(f"{name}: {_short(text)} is not 1 or 0")
+            continue
         if s.optional and text.lower() in ("", "none"):
             values[name] = None
             continue
@@ -187,6 +236,11 @@ def parse_query(args: Mapping[str, object]) -> tuple[dict, list[str]]:
                 continue
             number = int(number)
         values[name] = number
+    # A link that picks the swept parameter without a range gets that parameter's range.
+    if "bif_param" in raw and values["bif_param"] != "omega":
+        for name in ("bif_min", "bif_max"):
+            if name not in raw:
+                values[name] = None
     # psi is in time units in the URL; the settings hold psi / T.
     if "psi" in raw and not any(e.startswith("psi:") for e in errors):
         omega = values["omega"]
@@ -210,7 +264,9 @@ def to_query(run: Run) -> dict[str, str]:
     for s in SETTINGS:
         v = (getattr(run.params, s.name) if s.physical else
              run.psi if s.name == "psi" else getattr(run, s.name))
-        if v is not None:
+        if isinstance(v, bool):
+            q[s.name] = "1" if v else "0"
+        elif v is not None:
             q[s.name] = v if isinstance(v, str) else repr(v)
     return q
 

@@ -6,14 +6,16 @@ list it in ``VIEWS`` below; the session builds it, lays it out and feeds it.
 """
 from .base import View
 from .bifurcation import BifurcationView
+from .branches import BranchesView
 from .displacement import DisplacementView
 from .impact_map import ImpactMapView
+from .lyapunov import LyapunovView
 from .phase import PhaseView
 from .poincare import PoincareView
 
 #: The views of a page, in page order.
 VIEWS: tuple[type[View], ...] = (DisplacementView, PhaseView, ImpactMapView, PoincareView,
-                                 BifurcationView)
+                                 BifurcationView, LyapunovView, BranchesView)
 
-__all__ = ["VIEWS", "BifurcationView", "DisplacementView", "ImpactMapView", "PhaseView",
-           "PoincareView", "View"]
+__all__ = ["VIEWS", "BifurcationView", "BranchesView", "DisplacementView", "ImpactMapView",
+           "LyapunovView", "PhaseView", "PoincareView", "View"]

@@ -19,7 +19,8 @@ def make_figure(name: str, title: str, x_label: str, y_label: str, **kw):
     """A figure sized to stretch across its column, with readable labels."""
     fig = figure(name=name, title=title, x_axis_label=x_label, y_axis_label=y_label,
                  height=kw.pop("height", HEIGHT), sizing_mode="stretch_width",
-                 min_width=280, tools=kw.pop("tools", POINTS_TOOLS), toolbar_location="right",
+                 min_width=280, tools=kw.pop("tools", POINTS_TOOLS),
+                 toolbar_location=kw.pop("toolbar_location", "right"),
                  output_backend="canvas", **kw)
     fig.title.text_font_size = "14px"
     for axis in (fig.xaxis, fig.yaxis):

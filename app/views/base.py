@@ -14,6 +14,10 @@ class View:
 
     figure = None
 
+    def link(self, views: dict) -> None:
+        """Once every view of the page exists (``views`` by key): share a range with, or
+        draw into, another view's figure."""
+
     def show_scene(self, scene) -> None:
         """A new trajectory (``app.compute.SceneData``: run, trajectory, impacts)."""
 
@@ -26,5 +30,12 @@ class View:
     def diagram_chunk(self, part: dict) -> None:
         """More of the diagram (columns omega, v, t, phase; ``drawn`` rows to plot)."""
 
+    def show_branches(self, branches) -> None:
+        """Periodic branches over the diagram's range (``app.branches.BranchSet``); a str
+        says why there are none yet (computing, no diagram); None: switched off."""
+
     def diagram_finished(self, text: str) -> None:
         """The diagram ended: "complete", "partial (time limit)" or "failed"."""
+
+    def connect(self, pick) -> None:
+        """Gestures on the view may change settings through ``pick(**settings)``."""

@@ -25,10 +25,10 @@ def counted(monkeypatch):
     seen, gate = [], threading.Event()
     real = diagram.compute_chunk
 
-    def compute_chunk(run, values):
+    def compute_chunk(run, values, direction=0):
         assert gate.wait(30)
         seen.extend(values.tolist())
-        return real(run, values)
+        return real(run, values, direction)
 
     monkeypatch.setattr(diagram, "compute_chunk", compute_chunk)
     yield seen, gate
@@ -47,7 +47,7 @@ def points(view) -> list:
 
 def reference(args) -> list:
     run = state.validate(state.parse_query(args)[0])
-    return _rows(DIRECT(run, diagram.omega_values(run)))
+    return _rows(DIRECT(run, diagram.sweep_values(run)))
 
 
 def test_two_sessions_one_computation(counted):

@@ -161,7 +161,7 @@ def test_app_diagram_has_a_work_ceiling():
     _needs_ceiling(diagram)
     values, _ = state.parse_query({"c": "1e4", "bif_n": "400"})
     run = state.validate(values)
-    chunk = diagram.chunk_values(diagram.omega_values(run))[0][:16]
+    chunk = diagram.chunk_values(diagram.sweep_values(run))[0][:16]
     tic = time.perf_counter()
     part = diagram.compute_chunk(run, chunk)
     elapsed = time.perf_counter() - tic

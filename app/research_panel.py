@@ -1,0 +1,162 @@
+"""The research card of the page: regime map and basins, built when first opened.
+
+Closed, the card is one line at the bottom of the page (no figure, no Bokeh models
+beyond the card itself), so the six main figures keep their place and the page stays
+light. Opening it builds both tabs' contents and computes the open tab's picture;
+switching to the other tab computes that one if it is not there yet. The buttons
+recompute for the current settings; "Cancel" stops the computation (rows so far stay).
+The session (app.explorer) runs the work in its one research job and sends the row
+blocks here; nothing here computes.
+"""
+from __future__ import annotations
+
+import time
+
+import panel as pn
+
+from .controls import NamedHTML
+
+MAP, BASINS = "map", "basins"
+TITLE = "Research: regime map and basins of attraction"
+
+
+class ResearchPanel:
+    """``compute(kind)`` asks the session for a picture (kind MAP or BASINS);
+    ``cancel()`` stops it; ``pick(**settings)`` is what taps on the views do."""
+
+    def __init__(self, widgets: dict, *, compute, cancel, pick, downloads):
+        self._widgets, self._compute, self._cancel, self._pick = widgets, compute, cancel, pick
+        self._downloads = downloads
+        self.views: dict = {}               # kind -> view, once built
+        self.running: str | None = None     # kind being computed
+        self._keys: dict = {}               # kind -> key of the request shown
+        self._scene = None
+        self._t0 = 0.0
+        self.card = pn.layout.Card(title=TITLE, collapsed=True, sizing_mode="stretch_width",
+                                   css_classes=["ie-research"])
+        self.card.param.watch(self._on_toggle, "collapsed")
+
+    @property
+    def built(self) -> bool:
+        return bool(self.views)
+
+    # -- building -------------------------------------------------------------------------
+
+    def _on_toggle(self, event) -> None:
+        if event.new:
+            return
+        if not self.built:
+            self.build()
+        self._open(self.tabs.active)
+
+    def build(self) -> None:
+        """Make both views and the card's contents (first opening only)."""
+        from .views.basins import BasinsView
+        from .views.regime_map import RegimeMapView
+        from .views._figure import share_helpers
+        self.views = {MAP: RegimeMapView(), BASINS: BasinsView()}
+        share_helpers([v.figure for v in self.views.values()])
+        for view in self.views.values():
+            view.connect(self._pick)
+        self.status, self.progress, self.legend, self.buttons = {}, {}, {}, {}
+        tabs = []
+        for kind, label, names in ((MAP, "Compute regime map", ("map_x", "map_y", "map_n")),
+                                   (BASINS, "Compute basins", ("basins_n",))):
+            view = self.views[kind]
+            button = pn.widgets.Button(label=label, color="primary", width=170,
+                                       css_classes=[f"ie-{kind}-compute"])
+            button.on_click(lambda event, k=kind: self._compute(k))
+            stop = pn.widgets.Button(label="Cancel", width=80, css_classes=[f"ie-{kind}-cancel"])
+            stop.on_click(lambda event: self._cancel())
+            self.buttons[kind] = button
+            save = pn.widgets.FileDownload(
+                callback=lambda v=view: getattr(self._downloads, f"{v.key}_csv")(v),
+                filename=f"{view.key}.csv", label="CSV", width=70,
+                css_classes=[f"ie-{kind}-csv"])
+            self.progress[kind] = pn.indicators.Progress(value=0, max=100, width=160,
+                                                         height=14, margin=(14, 10))
+            self.status[kind] = NamedHTML("", model_name=f"{view.key}_status",
+                                          css_classes=[f"ie-{kind}-status"],
+                                          sizing_mode="stretch_width")
+            self.legend[kind] = pn.pane.HTML(view.legend, width=260,
+                                             css_classes=[f"ie-{kind}-legend"])
+            for n in names:             # (in the sidebar they would stretch; here not)
+                self._widgets[n].param.update(sizing_mode="fixed", width=150)
+            controls = pn.Row(*(self._widgets[n] for n in names), button, stop, save,
+                              sizing_mode="stretch_width")
+            tabs.append((
+                "Regime map" if kind == MAP else "Basins",
+                pn.Column(controls, pn.Row(self.progress[kind], self.status[kind],
+                                           sizing_mode="stretch_width"),
+                          pn.Row(pn.pane.Bokeh(view.figure, sizing_mode="stretch_width"),
+                                 self.legend[kind], sizing_mode="stretch_width"),
+                          sizing_mode="stretch_width")))
+        self.tabs = pn.Tabs(*tabs, dynamic=True, sizing_mode="stretch_width")
+        self.tabs.param.watch(lambda event: self._open(event.new), "active")
+        self.card.objects = [self.tabs]
+        if self._scene is not None:
+            self.show_scene(self._scene)
+
+    def _open(self, index: int) -> None:
+        """A tab is shown: compute its picture unless it is there or under way."""
+        kind = (MAP, BASINS)[index]
+        if kind not in self._keys and self.running != kind:
+            self._compute(kind)
+
+    # -- what the session shows -------------------------------------------------------------
+
+    def started(self, kind: str, request) -> None:
+        if self.running is not None and self.running != kind:
+            self.cancelled()
+        self.running = kind
+        self._t0 = time.perf_counter()
+        self._keys[kind] = request.key()
+        self.views[kind].started(request)
+        self.legend[kind].object = self.views[kind].legend
+        self.progress[kind].value = 0
+        self.status[kind].object = "computing…"
+        self.buttons[kind].disabled = True
+
+    def rows(self, kind: str, block) -> None:
+        view = self.views[kind]
+        view.rows(block)
+        self.legend[kind].object = view.legend
+        self.progress[kind].value = int(100 * block.rows_done / block.rows_total)
+        self.status[kind].object = f"computing… {block.rows_done}/{block.rows_total} rows"
+
+    def finished(self, kind: str, block) -> None:
+        """The last block arrived (``block`` None: there was none)."""
+        self.running = None
+        self.buttons[kind].disabled = False
+        message = block.message if block is not None else "nothing computed"
+        complete = block is not None and block.rows_done == block.rows_total
+        elapsed = time.perf_counter() - self._t0
+        head = (f"complete: {block.rows_total} rows in {elapsed:.2f} s" if complete
+                else f"partial: {block.rows_done if block else 0} rows in {elapsed:.2f} s")
+        text = head if message == "complete" else f"{head} — {message}"
+        self.status[kind].object = text
+        self.views[kind].finished("complete" if complete else "partial")
+
+    def failed(self, kind: str, text: str) -> None:
+        self.running = None
+        self._keys.pop(kind, None)
+        self.buttons[kind].disabled = False
+        self.status[kind].object = f"not computed — {text}"
+        self.views[kind].finished("not computed")
+
+    def cancelled(self) -> None:
+        """The running computation was stopped (cancel button or superseded)."""
+        kind, self.running = self.running, None
+        if kind is None:
+            return
+        view = self.views[kind]
+        self.buttons[kind].disabled = False
+        self.status[kind].object = (f"cancelled after {view.rows_done} rows — press "
+                                    f"{self.buttons[kind].name!r} to compute again")
+        view.finished("cancelled")
+
+    def show_scene(self, scene) -> None:
+        self._scene = scene
+        for view in self.views.values():
+            view.show_scene(scene)
+

@@ -1,0 +1,199 @@
+"""The stability readout of a scene: the periodic orbit the motion settles on, with its
+Floquet multipliers, or the two Lyapunov exponents of a motion that does not settle.
+
+The motion is the scene's own (its start, window and physics) run by the exact method:
+stability is a property of the oscillator, not of the integrator the scene compares. A
+motion has settled on a period-n orbit when its Poincaré points (section t = 0 mod T)
+repeat after n periods at the end of the window; the orbit is then polished by
+``il.periodic_orbit`` from the last point (Newton with the exact Jacobian), and is only
+reported if Newton stays on that point. Otherwise both Lyapunov exponents are measured
+with an error estimate, continuing from the end of the window over as long again; "chaotic"
+is said only when the largest one is positive by more than twice its error (the label
+is ``il.classify``'s, the exponents are the same measurement).
+
+Readouts are shared by all sessions (``pn.cache`` keyed by the frozen inputs, LRU).
+"""
+from __future__ import annotations
+
+import cmath
+import html
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import panel as pn
+
+import impactlib as il
+from impactlib.lyapunov import lyapunov_from
+
+from .compute import scene_limits
+from .state import Run
+
+#: Poincaré points closer than this (relative to the orbit's size, at least 1) count as
+#: repeating; a period-n orbit is looked for up to MAX_PERIOD periods.
+REPEAT_RTOL = 1e-6
+MAX_PERIOD = 16
+#: Newton may move the point this far (relative) and still be the orbit the motion is on;
+#: further for a motion that il.classify calls periodic but is still settling.
+SAME_ORBIT_RTOL = 1e-4
+SETTLING_RTOL = 1e-2
+#: Short words for il.classify's kinds (its full label is on the motion badge).
+VERDICTS = {"chaotic": "chaotic: λ₁ is positive by more than twice its error",
+            "undetermined": "undetermined: λ₁ is not beyond twice its error from 0 — "
+                            "lengthen the window"}
+
+
+@dataclass(frozen=True)
+class Readout:
+    """What the readout says about one motion.
+
+    kind : "orbit" (settled on a periodic orbit), "exponents" (not periodic in the
+        window: Lyapunov exponents) or "failed".
+    verdict : one line in words ("stable", "chaotic", "sticks to the wall", ...).
+    orbit : il.PeriodicOrbit or None.  lyapunov : il.Lyapunov or None.
+    """
+
+    kind: str
+    verdict: str
+    orbit: object = None
+    lyapunov: object = None
+
+    @property
+    def sticks(self) -> bool:
+        return bool((self.orbit is not None and self.orbit.sticks)
+                    or (self.lyapunov is not None and self.lyapunov.sticks))
+
+
+def readout_key(run: Run) -> tuple:
+    """What the readout depends on: the physics, the start and the window (not the
+    scene's integration method, not the section, not the diagram)."""
+    return (run.params, run.x0, run.v0, run.t_end, run.t_record)
+
+
+def repeat_period(px: np.ndarray, pv: np.ndarray, max_period: int = MAX_PERIOD) -> int:
+    """Smallest n such that the last two Poincaré points repeat after n periods
+    (0: none up to ``max_period``)."""
+    if px.size < 3:
+        return 0
+    tol = REPEAT_RTOL * max(1.0, float(np.max(np.abs(px[-8:]))), float(np.max(np.abs(pv[-8:]))))
+    for n in range(1, max_period + 1):
+        if px.size < n + 2:
+            break
+        if all(abs(px[-1 - j] - px[-1 - j - n]) <= tol and abs(pv[-1 - j] - pv[-1 - j - n]) <= tol
+               for j in (0, 1)):
+            return n
+    return 0
+
+
+def orbit_at(p: il.Params, n: int, x: float, v: float, rtol: float):
+    """The period-n orbit through (x, v) on the section t = 0, or None: Newton from there
+    must converge and stay within ``rtol`` (relative) of it. A stable orbit of a period
+    dividing n is preferred (a period-1 orbit settled onto slowly, through multipliers
+    near -1, also nearly repeats after 2); an unstable one is not what the motion is on
+    (just past a period doubling, the period-2 motion passes near the period-1 orbit)."""
+    scale = max(1.0, abs(x), abs(v))
+    for d in [d for d in range(1, n) if n % d == 0] + [n]:
+        orb = il.periodic_orbit(p, d, x0=x, v0=v, phase=0.0)
+        near = orb.converged and max(abs(orb.x - x), abs(orb.v - v)) <= rtol * scale
+        if near and (d == n or orb.stable):
+            return orb
+    return None
+
+
+def settled_orbit(p: il.Params, x0, v0: float, t_end: float, t_record: float):
+    """The periodic orbit a run from (x0, v0) has settled on by ``t_end``, or None.
+
+    Returns (orbit, solution): the orbit (``il.PeriodicOrbit`` on the section t = 0 mod T,
+    converged, on the run's last section point) or None, and the exact run."""
+    sol = il.simulate(p, t_end=t_end, t_record=t_record, x0=x0, v0=v0, phase=0.0,
+                      limits=scene_limits("exact"))
+    px, pv = np.asarray(sol.poincare.x), np.asarray(sol.poincare.v)
+    n = repeat_period(px, pv) if sol.status == 0 else 0
+    if n == 0:
+        return None, sol
+    return orbit_at(p, n, float(px[-1]), float(pv[-1]), SAME_ORBIT_RTOL), sol
+
+
+def _stability_readout(key: tuple) -> Readout:
+    p, x0, v0, t_end, t_record = key
+    orb, sol = settled_orbit(p, x0, v0, t_end, t_record)
+    settling = ""
+    if orb is None:
+        # il.classify's looser test may see a period the strict one missed (an orbit
+        # still settling, with a multiplier near the unit circle, or a period above 16)
+        motion = il.classify(sol)
+        if motion.kind == "periodic" and math.isfinite(motion.period) and len(sol.poincare):
+            orb = orbit_at(p, int(motion.period), float(sol.poincare.x[-1]),
+                           float(sol.poincare.v[-1]), SETTLING_RTOL)
+            orb = orb if orb is not None and orb.stable else None
+            settling = " (the motion is still settling onto it at the end of the window)"
+    if orb is not None:
+        if orb.sticks:
+            verdict = ("sticks to the wall in every cycle: the release time is fixed by the "
+                       "forcing alone, so the map is locally constant — multipliers 0 "
+                       "(superstable)")
+        else:
+            verdict = "stable" if orb.stable else "unstable (the motion is leaving it)"
+        return Readout("orbit", verdict + settling, orbit=orb)
+    # The label is il.classify's, which measures before it says "chaotic"; the exponents
+    # shown are the same measurement (continued from the run's end over a window as long
+    # as its own, within about the run's own work), with both exponents.
+    tf, xf, vf, _ = sol.final
+    window = sol.t_end - sol.t_record
+    budget = il.RunLimits(max_impacts=2 * sol.n_impacts + 1000, max_steps=2 * sol.nsteps + 10000)
+    ly = lyapunov_from(p, tf, xf, vf, tf + window, tf, limits=budget)
+    verdict = VERDICTS.get(motion.kind, motion.label)
+    if ly.sticks and "sticks" not in verdict:
+        verdict += " — the motion sticks to the wall: its Jacobian vanishes, exponents −∞"
+    return Readout("exponents", verdict, lyapunov=ly)
+
+
+@pn.cache(max_items=64, policy="LRU", hash_funcs={il.Params: lambda p: repr(p).encode()})
+def stability_readout(key: tuple) -> Readout:
+    """The readout of ``readout_key(run)``, cached across sessions."""
+    return _stability_readout(key)
+
+
+def readout(run: Run) -> Readout:
+    """The stability readout of ``run``'s motion (a ``failed`` one instead of raising)."""
+    try:
+        return stability_readout(readout_key(run))
+    except ValueError as exc:
+        return Readout("failed", f"no readout: {exc}")
+
+
+def _number(z: complex) -> str:
+    if abs(z.imag) < 1e-12 * max(1.0, abs(z)):
+        return f"{z.real:.4f}".replace("-", "−")
+    sign = "+" if z.imag >= 0 else "−"
+    return f"{z.real:.4f} {sign} {abs(z.imag):.4f}i".replace("-", "−")
+
+
+def _exponent(x: float) -> str:
+    if x == -math.inf:
+        return "−∞"
+    return "NaN" if x != x else f"{x:+.4f}".replace("-", "−")
+
+
+def to_html(r: Readout) -> str:
+    """The readout as one or two lines of HTML."""
+    if r.kind == "failed":
+        return f"Stability: {html.escape(r.verdict)}"
+    if r.kind == "orbit":
+        o = r.orbit
+        label = o.label + (" with sticking" if o.sticks and "sticking" not in o.label else "")
+        mus = ", ".join(f"μ{i + 1} = {_number(complex(m))}" for i, m in enumerate(o.multipliers))
+        mods = ", ".join(f"{abs(m):.4f}" for m in o.multipliers)
+        arg = ""
+        if not o.sticks and abs(complex(o.multipliers[0]).imag) > 0:
+            arg = f", arg μ1 = {cmath.phase(complex(o.multipliers[0])):.3f} rad"
+        return (f"Stability: settled on the <b>{html.escape(label)}</b> orbit · Floquet "
+                f"multipliers {mus} (|μ| = {mods}{arg}) · <b>{html.escape(r.verdict)}</b>")
+    ly = r.lyapunov
+    lam = ", ".join(f"λ{i + 1} = {_exponent(e)} ± {er:.2g}" if math.isfinite(e) else
+                    f"λ{i + 1} = {_exponent(e)}" for i, (e, er) in
+                    enumerate(zip(ly.exponents, ly.error)))
+    return (f"Stability: not periodic in the window · Lyapunov exponents {lam} per unit "
+            f"time, measured over [{ly.window[0]:g}, {ly.window[1]:g}] s ({ly.n_impacts} "
+            f"impacts) · "
+            f"<b>{html.escape(r.verdict)}</b>")

@@ -1,0 +1,103 @@
+"""View 6: the largest Lyapunov exponent along the diagram's sweep, under the diagram and
+sharing its x axis (the same ``x_range`` object), filled in with the diagram's chunks:
+one point per swept value and chain (a sweep up and down gives two, in the diagram's
+two colours).
+
+λ₁ > 0 marks chaos (a band of positive points), λ₁ < 0 a periodic attractor. A motion
+that sticks to the wall has λ₁ = −∞ and one whose exponent is undefined (unbounded
+growth, or a run stopped at a work limit) NaN: both are drawn at the bottom edge, as a
+downward triangle and a cross, and counted in the title, never dropped.
+"""
+from __future__ import annotations
+
+import numpy as np
+from bokeh.models import ColumnDataSource, Grid, Range1d, Span
+
+from ..settings import AXIS_LABELS
+from ..state import Run
+from ._figure import LINE, WALL, make_figure, padded, set_range
+from .base import View
+from .bifurcation import DOWN, UP
+
+STICKS = ("inverted_triangle", "#7a5195")   # λ₁ = −∞: off the bottom
+UNDEFINED = ("x", "#b35900")          # λ₁ NaN
+FINITE = ("circle", LINE)
+#: Finite exponents in the diagram's colours: independent starts, sweep up, sweep down.
+SWEEP_COLORS = {0: LINE, 1: UP, -1: DOWN}
+
+#: The y axis spans at least this much around 0, so that a strip of periodic motion
+#: (λ₁ ≈ −0.1) does not blow noise up.
+MIN_SPAN = 0.1
+
+
+def _empty() -> dict:
+    return {"omega": np.zeros(0), "lyapunov": np.zeros(0), "y": np.zeros(0),
+            "sweep": np.zeros(0, dtype=np.int8), "marker": [], "color": [],
+            "size": np.zeros(0)}
+
+
+def strip_columns(values: np.ndarray, lam: np.ndarray, sweep: np.ndarray) -> tuple[dict, tuple]:
+    """Columns of the strip (sorted by the swept value, then sweep up before down) and
+    its y range: finite values as they are, -inf and NaN at the bottom edge with their
+    own marker. ``sweep``: the chain of each value (0 independent, +1 up, -1 down)."""
+    order = np.lexsort((-sweep, values))
+    x, lam, sweep = values[order], lam[order], sweep[order]
+    finite = np.isfinite(lam)
+    lo, hi = padded(lam[finite], include=(-MIN_SPAN / 2, MIN_SPAN / 2))
+    bottom = lo + 0.03 * (hi - lo)
+    y = np.where(finite, lam, bottom)
+    sticks = lam == -np.inf
+    marker = np.where(finite, FINITE[0], np.where(sticks, STICKS[0], UNDEFINED[0]))
+    tint = np.array([SWEEP_COLORS[int(d)] for d in sweep], dtype=object)
+    color = np.where(finite, tint, np.where(sticks, STICKS[1], UNDEFINED[1]))
+    return ({"omega": x, "lyapunov": lam, "y": y, "sweep": sweep, "marker": marker.tolist(),
+             "color": color.tolist(), "size": np.where(finite, 3.0, 7.0)}, (lo, hi))
+
+
+class LyapunovView(View):
+    key = "lyapunov"
+    wide = True
+
+    def __init__(self):
+        self.source = ColumnDataSource(_empty())
+        self.values: list[np.ndarray] = []
+        self.exponents: list[np.ndarray] = []
+        self.sweeps: list[np.ndarray] = []
+        self.figure = make_figure("lyapunov_figure", "Largest Lyapunov exponent λ₁",
+                                  "driving frequency ω (rad/s)", "λ₁ (1/s)", height=190,
+                                  y_range=Range1d(-MIN_SPAN, MIN_SPAN), tools="",
+                                  toolbar_location=None)
+        # few Bokeh models per page: no tools (the x axis is the diagram's, zoomed there)
+        # and no grid lines (the zero line is the one that matters)
+        self.figure.center = [m for m in self.figure.center if not isinstance(m, Grid)]
+        self.figure.add_layout(Span(location=0.0, dimension="width", line_color=WALL,
+                                    line_width=1, name="lyapunov_zero"))
+        self.figure.scatter("omega", "y", source=self.source, size="size", marker="marker",
+                            color="color", name="lyapunov")
+
+    def link(self, views: dict) -> None:
+        """Share the diagram's x axis: zooming or panning one moves both."""
+        self.figure.x_range = views["bifurcation"].figure.x_range
+
+    def diagram_started(self, run: Run) -> None:
+        self.values, self.exponents, self.sweeps = [], [], []
+        self.source.data = _empty()
+        self.figure.xaxis.axis_label = AXIS_LABELS[run.bif_param]
+        self.figure.title.text = "Largest Lyapunov exponent λ₁ — computing"
+
+    def diagram_chunk(self, part: dict) -> None:
+        """All values so far in one assignment (the bottom edge moves with the data)."""
+        self.values.append(part["values"])
+        self.exponents.append(part["lyapunov"])
+        self.sweeps.append(part["sweep"])
+        values, lam = np.concatenate(self.values), np.concatenate(self.exponents)
+        data, (lo, hi) = strip_columns(values, lam, np.concatenate(self.sweeps))
+        self.source.data = data
+        set_range(self.figure.y_range, lo, hi)
+        n = lam.size
+        chaos = int(np.count_nonzero(lam > 0))
+        sticks = int(np.count_nonzero(lam == -np.inf))
+        undefined = int(np.count_nonzero(np.isnan(lam)))
+        self.figure.title.text = (
+            f"Largest Lyapunov exponent λ₁: {chaos} of {n} values > 0 (chaos) · {sticks} "
+            f"stick (−∞, ▼ at the bottom) · {undefined} undefined (×)")
