@@ -21,7 +21,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from hypothesis import assume, event, given, settings, strategies as st
+from hypothesis import assume, event, example, given, settings, strategies as st
 
 import impactlib as il
 
@@ -99,14 +99,19 @@ def _energy_terms(p, sol):
 
 
 def _quadrature_tol(p, sol, e):
-    """Trapezoid error bound, h^2/12 * span * max|f''| with f'' ~ (omega + rate)^2 |f|,
-    plus rounding; f = F v is at most |v|max, scaled by the energy it moves."""
+    """Trapezoid error bound h^2/12 * span * max|f''| for both integrands, f = cos(wt) v
+    and 2c v^2, with |v'|, |v''| bounded through Eq. (1) (the forcing drives the
+    acceleration even where v is small), plus rounding."""
     d = sol.dense
     h = float(np.max(np.diff(d.t)))
-    rate = max(p.omega, p.omega_n, p.c / p.m, 1e-3)
     vmax = float(np.max(np.abs(d.v))) + 1e-12
+    xmax = float(np.max(np.abs(d.x)))
     span = float(d.t[-1] - d.t[0])
-    smooth = h ** 2 / 12 * span * (p.omega + rate) ** 2 * vmax * (1 + 2 * p.c * vmax)
+    amax = (1 + p.k * xmax + 2 * p.c * vmax) / p.m                  # |v'|
+    jmax = (p.omega + p.k * vmax + 2 * p.c * amax) / p.m            # |v''|
+    f_work = p.omega ** 2 * vmax + 2 * p.omega * amax + jmax
+    f_damp = 4 * p.c * (amax ** 2 + vmax * jmax)
+    smooth = h ** 2 / 12 * span * (f_work + f_damp)
     return 10 * smooth + 1e3 * EPS * (float(np.max(e)) + span * vmax)
 
 
@@ -128,6 +133,8 @@ def test_elastic_undamped_energy_changes_only_by_the_forcing_work(m, k, g, omega
 
 @PROFILE
 @given(**BOX)
+# near the wall at r = 1 the forcing, not v, sets the integrand's curvature (901 impacts)
+@example(m=1.0, c=1.0, k=2.5, g=0.375, r=1.0, omega=1.0, v0=0.0)
 def test_energy_never_grows_beyond_the_forcing_work(m, c, k, g, r, omega, v0):
     """With damping and r < 1 the balance holds with the losses accounted for; chatter
     summed to its accumulation point only adds losses, so then it is an upper bound."""
