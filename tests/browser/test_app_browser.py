@@ -245,12 +245,18 @@ def test_slider_to_repaint_latency(page, server):
     assert statistics.median(samples) < 500, samples   # target 150 ms; see app_figures.md
 
 
-def test_page_has_at_most_180_bokeh_models(page, server):
+#: Bokeh models a page may hold at the paper defaults: the five views, controls and
+#: status of the session-cost work came to 171 (target 180); the Lyapunov strip under the
+#: diagram adds 12 and the stability readout with the branches box 9 (192 measured).
+MODEL_BUDGET = 200
+
+
+def test_page_bokeh_models_within_budget(page, server):
     """A count, not a timing: every model is built, serialised and sent per session
-    (the sidebar's collapsed cards are built when opened)."""
+    (the sidebar's collapsed cards and the research card are built when opened)."""
     open_app(page, server)
     n = page.evaluate("Bokeh.documents[0].all_models.size")
-    assert n <= 180, n
+    assert n <= MODEL_BUDGET, n
 
 
 def test_server_log_has_no_traceback(server):
