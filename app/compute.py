@@ -18,6 +18,8 @@ from .state import Run
 SCENE_POINTS = 4000
 #: At most this many impact corners are inserted into the time series.
 MAX_CORNERS = 2000
+#: At most this many sticking intervals are shaded (the last ones).
+MAX_STICKING = 2000
 #: At most this many points in the impact map and the Poincare map.
 MAX_MAP_POINTS = 20_000
 #: Ceilings of one scene simulation (a scene is two): reaching one stops the run with
@@ -66,6 +68,7 @@ class SceneData:
     run: Run
     trajectory: dict   # t, x, v (dense samples with exact impact corners)
     impacts: dict      # t, phase, v (before impact), v_after
+    sticking: dict     # start, end of the intervals the mass rests on the wall
     label: str
     elapsed: float
     status: int
@@ -108,7 +111,9 @@ def build_scene(run: Run) -> SceneData:
     v = last(imp.v, MAX_MAP_POINTS)
     impacts = {"t": last(imp.t, MAX_MAP_POINTS), "phase": last(imp.phase, MAX_MAP_POINTS),
                "v": v, "v_after": -p.r * v}
+    stick = np.asarray(sol.sticking, dtype=float).reshape(-1, 2)[-MAX_STICKING:]
     return SceneData(run=run, trajectory=trajectory_columns(sol, p.r, p.g), impacts=impacts,
+                 sticking={"start": stick[:, 0].copy(), "end": stick[:, 1].copy()},
                  label=il.classify(sol).label, elapsed=float(sol.elapsed),
                  status=int(sol.status), message=str(sol.message))
 

@@ -15,15 +15,96 @@ from .panel_fixes import PromptFloatSlider
 from .scenes import SCENES
 from .settings import SETTINGS
 
-SIDEBAR_WIDTH = 310
+SIDEBAR_WIDTH = 300
 STATUS_NAME = "bifurcation_status"
 CAPTION = ("Paper defaults: m = 1, c = 0.05, k = 1, g = 0, r = 0.8, ω = 2. "
            "Pick a scene of the paper or move a slider.")
 CHANGED_NOTE = "\n\n*Settings changed since this scene was loaded.*"
+NO_SCENE = "Scene of the paper…"
 CSS = """
-.ie-badge {font-size: 16px;}
+.ie-badge {font-size: 14px;}
 .ie-badge b {color: #1f5fa8;}
-.ie-accuracy td, .ie-accuracy th {padding: 2px 6px; font-size: 12px; text-align: left;}
+.ie-accuracy {border-collapse: collapse; width: 100%;}
+.ie-accuracy td, .ie-accuracy th {padding: 4px 10px; font-size: 15px; text-align: left;
+                                  border-bottom: 1px solid #ddd; white-space: nowrap;}
+"""
+#: The page fills the window on a landscape screen of at least 1000 x 560 CSS px (a
+#: projector at 1280 x 720 or 1920 x 1080): six cells, 3 x 2, no scrolling. Below that
+#: (tablets, zoomed laptops) the views take two columns (one below 640 px) of fixed
+#: height, the sidebar follows them, and the page scrolls down only.
+PAGE_CSS = """
+:host { width: 100%; }
+@media (max-width: 999px), (max-height: 559px) {
+  :host { flex-direction: column !important; height: auto !important; }
+}
+"""
+SIDEBAR_CSS = """
+:host { height: 100vh; overflow-y: auto; overflow-x: hidden; flex-shrink: 0; }
+@media (max-width: 999px), (max-height: 559px) {
+  :host { height: auto; width: 100% !important; overflow-y: visible; flex: none !important;
+          order: 2; }
+}
+"""
+MAIN_CSS = """
+:host { height: 100vh; min-width: 0; flex: 1 1 0%; }
+@media (max-width: 999px), (max-height: 559px) {
+  :host { height: auto !important; flex: none !important; }
+}
+"""
+GRID_CSS = """
+:host { display: grid !important; grid-template-columns: repeat(3, minmax(0, 1fr));
+        grid-template-rows: repeat(2, minmax(0, 1fr)); gap: 6px; flex: 1 1 0%;
+        min-height: 0; width: 100%; }
+@media (max-width: 999px), (max-height: 559px) {
+  :host { grid-template-columns: repeat(2, minmax(0, 1fr)); grid-auto-rows: 340px;
+          grid-template-rows: none; flex: none !important; height: auto !important; }
+}
+@media (max-width: 639px) { :host { grid-template-columns: minmax(0, 1fr); } }
+"""
+CELL_CSS = """
+:host { min-width: 0; min-height: 0; height: 100%; position: relative; }
+"""
+NOTE_CSS = """
+details { font-size: 12px; color: #555; }
+summary { cursor: pointer; }
+details[open] p { position: absolute; z-index: 10; background: #fffbe8; margin: 2px 0;
+                  padding: 6px 10px; border: 1px solid #e0c96b; border-radius: 4px;
+                  max-width: 30em; font-size: 14px; color: #222; }
+"""
+CAPTION_CSS = """
+:host { max-height: 4.6em; overflow-y: auto; }
+p { margin: 2px 0; }
+"""
+MODAL_CSS = """
+:host { position: fixed !important; top: 6vh; left: 5vw; width: 90vw !important;
+        max-height: 88vh; overflow: auto; z-index: 1000; background: white;
+        border: 1px solid #999; border-radius: 6px; box-shadow: 0 8px 30px #0005;
+        padding: 10px; }
+"""
+#: Saves every figure on the page as one PNG, drawn where it is on the page (BokehJS
+#: exports each plot's canvas; no server round trip).
+PNG_JS = """
+const views = [...Bokeh.index.query((v) => v.model.constructor.__name__ === "Figure")];
+const boxes = views.map((v) => [v, v.el.getBoundingClientRect()]).filter(([v, b]) => b.width > 0 && b.height > 0);
+if (boxes.length === 0) return;
+const x0 = Math.min(...boxes.map(([v, b]) => b.left)), y0 = Math.min(...boxes.map(([v, b]) => b.top));
+const x1 = Math.max(...boxes.map(([v, b]) => b.right)), y1 = Math.max(...boxes.map(([v, b]) => b.bottom));
+const r = window.devicePixelRatio || 1;
+const canvas = document.createElement("canvas");
+canvas.width = Math.round((x1 - x0 + 16) * r); canvas.height = Math.round((y1 - y0 + 16) * r);
+const ctx = canvas.getContext("2d");
+ctx.fillStyle = "white"; ctx.fillRect(0, 0, canvas.width, canvas.height);
+for (const [v, b] of boxes) {
+  const layer = v.export("png", true);
+  ctx.drawImage(layer.canvas, (b.left - x0 + 8) * r, (b.top - y0 + 8) * r, b.width * r, b.height * r);
+}
+canvas.toBlob((blob) => {
+  const a = document.createElement("a");
+  a.href = URL.createObjectURL(blob);
+  a.download = "impact_explorer.png";
+  document.body.appendChild(a); a.click(); a.remove();
+  setTimeout(() => URL.revokeObjectURL(a.href), 10000);
+}, "image/png");
 """
 
 
@@ -54,6 +135,10 @@ def make_widget(settings, s):
     if s.widget == "slider":
         return EditableSlider.from_param(par, start=s.soft[0], end=s.soft[1], step=s.step,
                                          format=s.fmt, **common)
+    if s.widget == "toggle":
+        return pn.widgets.Toggle.from_param(par, label=s.label, color="default", width=100,
+                                            margin=(4, 5),
+                                            css_classes=[f"ie-w-{s.name}"])
     if s.widget == "select":
         return pn.widgets.Select.from_param(par, description=s.doc, **common)
     cls = pn.widgets.IntInput if s.kind == "integer" else pn.widgets.FloatInput
@@ -70,23 +155,23 @@ class Controls:
         self.message = ""
         self.message_pane = pn.pane.Alert("", alert_type="warning", visible=False,
                                           css_classes=["ie-message"],
-                                          sizing_mode="stretch_width")
-        self.badge = pn.pane.HTML("", css_classes=["ie-badge"], sizing_mode="stretch_width",
-                                  stylesheets=[CSS])
+                                          sizing_mode="stretch_width", margin=(0, 5))
+        self.badge = pn.pane.HTML("", css_classes=["ie-badge"], stylesheets=[CSS],
+                                  margin=(0, 5))
         self.caption = pn.pane.Markdown(CAPTION, css_classes=["ie-caption"],
-                                        sizing_mode="stretch_width")
-        self.scene_buttons = []
-        for sc in SCENES:
-            b = pn.widgets.Button(label=sc.label, color="primary", variant="outline",
-                                  margin=(2, 3), css_classes=[f"ie-scene-{sc.key}"],
-                                  description=sc.caption.split("**")[1])
-            b.on_click(lambda event, key=sc.key: on_scene(key))
-            self.scene_buttons.append(b)
-        self.progress = pn.indicators.Progress(value=0, max=100, width=200, height=14,
-                                               bar_color="primary", margin=(8, 10))
+                                        sizing_mode="stretch_width", margin=(0, 5),
+                                        stylesheets=[CAPTION_CSS])
+        self._on_scene = on_scene
+        self.scene_select = pn.widgets.Select(
+            options={NO_SCENE: "", **{sc.label: sc.key for sc in SCENES}}, value="",
+            width=190, margin=(4, 5), css_classes=["ie-scene-select"],
+            description="Load the settings of one of the paper's figures")
+        self.scene_select.param.watch(self._scene_picked, "value")
+        self.progress = pn.indicators.Progress(value=0, max=100, width=120, height=12,
+                                               bar_color="primary", margin=(6, 5))
         self.diagram_status = NamedHTML("", model_name=STATUS_NAME,
                                         css_classes=["ie-diagram-status"],
-                                        sizing_mode="stretch_width")
+                                        sizing_mode="stretch_width", margin=(0, 5))
         self.accuracy_button = pn.widgets.Button(
             label="Compare methods", color="primary", sizing_mode="stretch_width",
             description="Run exact, rk4 and rk45 on the current scene and compare their "
@@ -94,7 +179,34 @@ class Controls:
         self.accuracy_button.on_click(lambda event: on_accuracy())
         self.accuracy_pane = pn.pane.HTML("", css_classes=["ie-accuracy-out"],
                                           stylesheets=[CSS], sizing_mode="stretch_width")
+        close = pn.widgets.Button(label="Close", width=80, css_classes=["ie-accuracy-close"])
+        self.accuracy_modal = pn.Column(
+            pn.Row(pn.pane.Markdown("### Accuracy of the three methods on this scene",
+                                    margin=(0, 5)), close),
+            self.accuracy_pane, visible=False, stylesheets=[MODAL_CSS],
+            css_classes=["ie-accuracy-modal"])
+        close.on_click(lambda event: setattr(self.accuracy_modal, "visible", False))
+        self.sidebar_toggle = pn.widgets.Toggle(label="☰ Settings", value=True, width=110,
+                                                margin=(4, 5), css_classes=["ie-sidebar-toggle"])
+        self.png_button = pn.widgets.Button(label="Save PNG", width=100, margin=(4, 5),
+                                            css_classes=["ie-png"],
+                                            description="All views as one PNG image")
+        self.png_button.js_on_click(code=PNG_JS)
         self.layout = self._layout(views, downloads)
+
+    def _scene_picked(self, event) -> None:
+        if event.new and not self._quiet:
+            self._on_scene(event.new)
+
+    _quiet = False
+
+    def show_scene_key(self, key: str | None) -> None:
+        """Show ``key`` in the scene menu without loading it again."""
+        self._quiet = True
+        try:
+            self.scene_select.value = key or ""
+        finally:
+            self._quiet = False
 
     # -- layout ------------------------------------------------------------------------
 
@@ -120,33 +232,42 @@ class Controls:
             out.append(pn.Row(*half))
         return out
 
+    def _cell(self, view):
+        """One view in the grid: its "what am I looking at" note and its figure."""
+        note = pn.pane.HTML(
+            f"<details><summary>What am I looking at?</summary><p>{view.note}</p></details>",
+            stylesheets=[NOTE_CSS], margin=(0, 5), height=18, sizing_mode="stretch_width",
+            css_classes=[f"ie-note-{view.key}"])
+        return pn.Column(note, pn.pane.Bokeh(view.root, sizing_mode="stretch_both"),
+                         sizing_mode="stretch_both", stylesheets=[CELL_CSS],
+                         css_classes=[f"ie-cell-{view.key}"])
+
     def _layout(self, views, downloads):
         card = dict(sizing_mode="stretch_width")
-        groups = list(dict.fromkeys(s.group for s in SETTINGS))
+        groups = [g for g in dict.fromkeys(s.group for s in SETTINGS) if g != "header"]
         cards = [pn.layout.Card(*self._group(g), title=g, **card,
                                 **({"collapsible": False} if i < 2 else {"collapsed": True}))
                  for i, g in enumerate(groups)]
-        sidebar = pn.Column(
+        self.sidebar = sidebar = pn.Column(
             *cards,
             pn.layout.Card(*downloads.widgets, title="Downloads", collapsed=True, **card),
-            pn.layout.Card(self.accuracy_button, self.accuracy_pane, title="Accuracy",
-                           collapsed=True, **card),
-            width=SIDEBAR_WIDTH)
-        pane = dict(sizing_mode="stretch_width")
-        grid = pn.GridBox(*(pn.pane.Bokeh(v.figure, **pane) for v in views if not v.wide),
-                          ncols=2, sizing_mode="stretch_width")
-        main = pn.Column(
-            pn.pane.Markdown("## Impact Explorer — forced oscillator with a rigid endstop",
-                             margin=(0, 10)),
-            self.message_pane,
-            pn.FlexBox(*self.scene_buttons, sizing_mode="stretch_width"),
-            self.caption,
-            self.badge,
-            grid,
-            pn.Row(self.progress, self.diagram_status, sizing_mode="stretch_width"),
-            *(pn.pane.Bokeh(v.figure, **pane) for v in views if v.wide),
-            sizing_mode="stretch_width")
-        return pn.Row(sidebar, main, sizing_mode="stretch_width")
+            pn.layout.Card(self.accuracy_button, title="Accuracy", collapsed=True, **card),
+            width=SIDEBAR_WIDTH, stylesheets=[SIDEBAR_CSS], css_classes=["ie-sidebar"])
+        self.sidebar_toggle.link(sidebar, value="visible")
+        header = pn.FlexBox(
+            self.sidebar_toggle,
+            pn.pane.HTML("<b style='font-size:17px'>Impact Explorer</b>", margin=(8, 5)),
+            self.scene_select,
+            *(self.widgets[s.name] for s in SETTINGS if s.group == "header"),
+            self.png_button, self.progress, self.diagram_status,
+            sizing_mode="stretch_width", align_items="center", flex_wrap="wrap")
+        self.grid = pn.Column(*(self._cell(v) for v in views), stylesheets=[GRID_CSS],
+                              sizing_mode="stretch_width", css_classes=["ie-grid"])
+        main = pn.Column(header, self.message_pane, self.caption, self.badge, self.grid,
+                         self.accuracy_modal, stylesheets=[MAIN_CSS], sizing_mode="stretch_width",
+                         css_classes=["ie-main"])
+        return pn.Row(sidebar, main, sizing_mode="stretch_width", stylesheets=[PAGE_CSS],
+                      css_classes=["ie-page"])
 
     # -- what the session shows --------------------------------------------------------
 
@@ -192,6 +313,8 @@ class Controls:
             self.progress.value = 0
 
     def show_accuracy(self, html: str | None) -> None:
-        """The accuracy table; None while it is computed."""
+        """The accuracy table, in a full-width panel over the page; None while it is
+        computed."""
         self.accuracy_button.disabled = html is None
         self.accuracy_pane.object = html or "computing exact, rk4 and rk45…"
+        self.accuracy_modal.visible = True

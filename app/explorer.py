@@ -41,6 +41,7 @@ class Explorer(pn.viewable.Viewer):
         values, errors = state.initial_settings(args or {})
         self.settings = Settings(**values)
         self.run = self.scene = self.section = None
+        self._scene_key = state.scene_of(args or {})   # the paper's scene loaded last
         self._scene_run = None            # run as loaded by the last scene button
         self._wanted = None               # the latest valid settings (may be computing)
         self._keep_message = True         # the link's message stays until a user change
@@ -51,6 +52,11 @@ class Explorer(pn.viewable.Viewer):
         self.views = [cls() for cls in VIEWS]
         for view in self.views:
             setattr(self, view.key, view)
+            view.request = self.request
+        for view in self.views:
+            view.connect({v.key: v for v in self.views})
+            if view.ready is not None and doc is not None:
+                doc.js_on_event("document_ready", view.ready)
         self.downloads = Downloads(self)
         self.controls = c = Controls(self.settings, self.views, on_scene=self.load_scene,
                                      on_accuracy=self._on_accuracy, downloads=self.downloads)
@@ -64,8 +70,16 @@ class Explorer(pn.viewable.Viewer):
             "accuracy", lambda run, t: accuracy.to_html(accuracy.compare_methods(run)),
             dispatch, pool=None if doc is None else _ACCURACY_POOL,
             on_result=self._accuracy_done)
-        self.settings.param.watch(self._on_settings, list(QUERY_NAMES))
+        self.settings.param.watch(self._on_settings, [n for n in QUERY_NAMES
+                                                      if n not in state.DISPLAY_FIELDS])
+        self.settings.param.watch(self._on_display, list(state.DISPLAY_FIELDS))
+        self._on_display()
         self._apply()
+        if self._scene_key is not None:
+            self.controls.show_caption(BY_KEY[self._scene_key].caption)
+            self.controls.show_scene_key(self._scene_key)
+            self._scene_run = state.validate(
+                {**state.defaults(), **BY_KEY[self._scene_key].settings()})
         if errors:
             self._message("Some settings in the link were not valid and were replaced by "
                           "defaults: " + "; ".join(errors))
@@ -95,9 +109,22 @@ class Explorer(pn.viewable.Viewer):
 
     # -- settings -> jobs ----------------------------------------------------------------
 
+    def request(self, **values) -> None:
+        """Settings asked for by a view (a tap on the phase plane: x0, v0)."""
+        self.settings.param.update(**values)
+
+    def _on_display(self, *events) -> None:
+        """Presenter mode on or off: type sizes and line widths of every view."""
+        with pn.io.hold(self._doc):
+            for view in self.views:
+                view.present(self.settings.presenter)
+            if events:
+                self._write_url()
+
     def load_scene(self, key: str) -> None:
         """Load one of the paper's scenes (all settings in one batch)."""
         sc = BY_KEY[key]
+        self._scene_key = key
         self.settings.param.update(**sc.settings())
         self.controls.show_caption(sc.caption)
         self._scene_run = self._wanted
@@ -208,4 +235,5 @@ class Explorer(pn.viewable.Viewer):
     def _write_url(self) -> None:
         loc = pn.state.location
         if loc is not None and self.run is not None and self._loaded:
-            loc.update_query(**state.to_query(self.run))
+            display = {n: getattr(self.settings, n) for n in state.DISPLAY_FIELDS}
+            loc.update_query(**state.to_query(self.run, self._scene_key, display))

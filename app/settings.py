@@ -7,6 +7,9 @@ help text, the widget that edits it, and which results depend on it:
 - ``section``: the Poincaré map only;
 - ``diagram``: the bifurcation diagram.
 
+A setting that affects none of them is a display setting (``presenter``): it travels
+in the URL but is not part of a ``Run`` and never causes a computation.
+
 Derived here: the ``Settings`` class (one ``param.Parameterized`` holding what the user
 typed, valid or not), ``QUERY_NAMES``, ``SCENE_FIELDS``, ``SECTION_FIELDS``,
 ``DIAGRAM_FIELDS``, and the method options passed to ``impactlib.simulate``
@@ -40,8 +43,8 @@ class Setting:
     doc: str
     affects: frozenset            # results that depend on it (SCENE, SECTION, DIAGRAM)
     group: str                    # sidebar card
-    widget: str = "input"         # "slider" | "input" | "select"
-    kind: str = "number"          # "number" | "integer" | "choice"
+    widget: str = "input"         # "slider" | "input" | "select" | "toggle"
+    kind: str = "number"          # "number" | "integer" | "choice" | "flag"
     lo: float | None = None       # valid range; None: unbounded
     hi: float | None = None
     lo_open: bool = False
@@ -56,6 +59,18 @@ class Setting:
     choices: tuple = ()
     method: str | None = None     # used by this integration method only
     physical: bool = False        # an il.Params field (the core checks its own range)
+
+    @property
+    def display(self) -> bool:
+        """Only changes how results are shown (not part of a Run)."""
+        return not self.affects
+
+    @property
+    def decimals(self) -> int | None:
+        """Decimal places of the widget's step (values are rounded to the step)."""
+        if self.step is None:
+            return None
+        return max(0, -int(f"{self.step:e}".split("e")[1]))
 
     @property
     def out_of_range(self) -> str:
@@ -140,17 +155,24 @@ SETTINGS: tuple[Setting, ...] = (
     Setting("bif_n", "diagram values", 400,
             f"Number of ω values in the diagram (2 … {BIF_N_MAX}).", frozenset({DIAGRAM}),
             "Bifurcation diagram range", kind="integer", lo=2, hi=BIF_N_MAX),
+    Setting("presenter", "Presenter", False,
+            "Large type and thick lines for a projector (read from the back of the room).",
+            frozenset(), "header", widget="toggle", kind="flag"),
 )
 
 BY_NAME = {s.name: s for s in SETTINGS}
 #: Every URL query name, in the order of SETTINGS.
 QUERY_NAMES = tuple(s.name for s in SETTINGS)
-NUMBER_FIELDS = tuple(s.name for s in SETTINGS if s.kind != "choice")
+NUMBER_FIELDS = tuple(s.name for s in SETTINGS if s.kind in ("number", "integer"))
+#: Settings that only change how results are shown (not part of a Run).
+DISPLAY_FIELDS = tuple(s.name for s in SETTINGS if s.display)
+#: Significant digits of a number in a URL (and of every value computed with).
+URL_DIGITS = 10
 SCENE_FIELDS = frozenset(s.name for s in SETTINGS if SCENE in s.affects)
 SECTION_FIELDS = frozenset(s.name for s in SETTINGS if SECTION in s.affects)
 DIAGRAM_FIELDS = frozenset(s.name for s in SETTINGS if DIAGRAM in s.affects)
 #: Settings that are not il.Params fields (a Run holds them next to its Params).
-RUN_FIELDS = tuple(s.name for s in SETTINGS if not s.physical)
+RUN_FIELDS = tuple(s.name for s in SETTINGS if not s.physical and not s.display)
 METHODS = BY_NAME["method"].choices
 
 
@@ -168,6 +190,8 @@ def method_text(values, method: str) -> str:
 
 def _parameter(s: Setting) -> param.Parameter:
     common = dict(label=s.label, doc=s.doc)
+    if s.kind == "flag":
+        return param.Boolean(default=s.default, **common)
     if s.kind == "choice":
         return param.Selector(default=s.default, objects=list(s.choices), **common)
     cls = param.Integer if s.kind == "integer" else param.Number

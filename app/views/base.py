@@ -5,14 +5,37 @@ every view in ``app.views.VIEWS`` and never needs to know which view shows what.
 """
 from __future__ import annotations
 
+from collections.abc import Callable
+
+from ._figure import style
+
 
 class View:
     #: Attribute of the session that holds this view (``session.displacement``).
     key = ""
     #: Full page width below the diagram's progress row (else one cell of the grid).
     wide = False
+    #: "What am I looking at": one or two sentences shown on request next to the view.
+    note = ""
 
     figure = None
+    #: A CustomJS to run once the page is ready (None: nothing to run).
+    ready = None
+    #: Asks the session to change settings (``request(x0=…, v0=…)``); set by the session.
+    request: Callable[..., None] = staticmethod(lambda **settings: None)
+
+    @property
+    def root(self):
+        """The Bokeh model the page lays out (the figure, or the figure and its own
+        controls)."""
+        return self.figure
+
+    def connect(self, views: dict) -> None:
+        """All views of the page exist (``views`` by key): make links between them."""
+
+    def present(self, presenter: bool) -> None:
+        """Large type and thick lines for a projector (True), or the screen (False)."""
+        style(self.figure, presenter)
 
     def show_scene(self, scene) -> None:
         """A new trajectory (``app.compute.SceneData``: run, trajectory, impacts)."""

@@ -140,9 +140,9 @@ def test_r_change_restarts_diagram(page, server):
     assert statistics.median(times) < 2.0, times      # target < 1 s; see app_figures.md
 
 
-def test_scene_button_loads_its_settings(page, server):
+def test_scene_menu_loads_its_settings(page, server):
     open_app(page, server)
-    page.locator(".ie-scene-fig7b button").click()
+    page.locator(".ie-scene-select select").select_option(label="Fig 7b · ψ=3T/8")
     page.wait_for_function("() => Math.abs(ie.model('bifurcation_marker').location - 2.8) < 1e-9",
                            timeout=10_000)
     page.wait_for_function("() => ie.title('poincare_figure').startsWith('Poincaré map at ψ = 0.375 T')",

@@ -1,0 +1,242 @@
+"""View 6: the motion animated — wall, spring, damper and mass drawn to scale in x,
+with play / pause, step, speed and a time slider over the recorded window.
+
+Everything moves in the browser (``ANIMATE``, BokehJS): the frames are interpolated
+from the displacement view's dense samples (cubic Hermite in x with the sampled ẋ, so
+a flight between two impact corners is a smooth hop), impacts flash the wall, the
+mass turns yellow while it sticks, and cursors move on the displacement plot and the
+phase trajectory. The models it moves are ``syncable=False`` and the cursors take no
+part in auto-ranging, so nothing travels to the server while it plays (and nothing
+comes back).
+"""
+from __future__ import annotations
+
+import numpy as np
+from bokeh.layouts import column, row
+from bokeh.models import (Button, ColumnDataSource, CustomJS, HoverTool, Label, Range1d,
+                          Select, Slider)
+
+from ..compute import SceneData
+from ._figure import IMPACT, LINE, STICK, WALL, make_figure, style
+from .base import View
+
+#: Frames per second of the animation.
+FPS = 30
+#: Playback speeds (simulated seconds per second).
+SPEEDS = ("0.1", "0.25", "0.5", "1", "2", "5", "10")
+#: Mass width, and the damper's rod, as fractions of the motion's span (the rod is
+#: longer than the span so that its cylinder never reaches the mass).
+MASS_WIDTH, ROD = 0.14, 1.08
+
+ANIMATE = """
+const st = mass.__ie || (mass.__ie = {playing: false, raf: null, last: null, tprev: null,
+                                      flash: 0, stuck: null, flashing: null});
+const I = info.data;
+if (!I.g || I.g.length == 0) return;
+const g = I.g[0], w = I.w[0], xs = I.xs[0], d = I.d[0], omega = I.omega[0], fs = I.fs[0];
+
+function bsearch(a, t) {          // last index with a[i] <= t (-1: none)
+  let lo = 0, hi = a.length - 1, ans = -1;
+  while (lo <= hi) { const m = (lo + hi) >> 1; if (a[m] <= t) { ans = m; lo = m + 1; } else hi = m - 1; }
+  return ans;
+}
+function state_at(t) {
+  const T = src.data.t, X = src.data.x, V = src.data.v, n = T.length;
+  if (n == 0) return [g, 0];
+  const i = bsearch(T, t);
+  if (i < 0) return [X[0], V[0]];
+  if (i >= n - 1) return [X[n - 1], V[n - 1]];
+  const h = T[i + 1] - T[i];
+  if (h <= 0) return [X[i], V[i]];
+  const s = (t - T[i]) / h, s2 = s * s, s3 = s2 * s;
+  const x = (2 * s3 - 3 * s2 + 1) * X[i] + (s3 - 2 * s2 + s) * h * V[i]
+          + (3 * s2 - 2 * s3) * X[i + 1] + (s3 - s2) * h * V[i + 1];
+  return [x, V[i] + s * (V[i + 1] - V[i])];
+}
+function draw(t) {
+  let [x, v] = state_at(t);
+  x = Math.max(x, g);
+  const a = x + w, L = xs - a;
+  mass.data = {x: [x], v: [v], t: [t], left: [x], right: [a], bottom: [-0.32], top: [0.32]};
+  const sx = [a, a + 0.1 * L], sy = [0.15, 0.15], N = 10;
+  for (let k = 1; k < N; k++) { sx.push(a + 0.1 * L + 0.8 * L * k / N); sy.push(k %% 2 ? 0.24 : 0.06); }
+  sx.push(a + 0.9 * L, xs); sy.push(0.15, 0.15);
+  spring.data = {x: sx, y: sy};
+  damper.data = {xs: [[a, a + d], [a + d, a + d]], ys: [[-0.17, -0.17], [-0.23, -0.11]]};
+  const F = Math.cos(omega * t), cx = x + 0.5 * w, tip = cx + F * fs;
+  force.data = {x0: [cx], x1: [tip], y: [0.5], angle: [F >= 0 ? -Math.PI / 2 : Math.PI / 2],
+                size: [Math.abs(F) > 0.05 ? 1 : 0]};
+  dcur.data = {t: [t], x: [x]};
+  pcur.data = {x: [x], v: [v]};
+  // impacts between the previous frame and this one flash the wall
+  const ti = imp.data.t;
+  if (st.tprev != null && t > st.tprev && bsearch(ti, t) > bsearch(ti, st.tprev)) {
+    st.flash = performance.now() + 140;
+  }
+  st.tprev = t;
+  const flashing = performance.now() < st.flash;
+  if (flashing !== st.flashing) {
+    wall.fill_color = flashing ? "%(impact)s" : "%(wall)s";
+    st.flashing = flashing;
+  }
+  const k = bsearch(stick.data.start, t);
+  const stuck = k >= 0 && t <= stick.data.end[k];
+  if (stuck !== st.stuck) { mass_glyph.fill_color = stuck ? "%(stick)s" : "%(line)s"; st.stuck = stuck; }
+  const what = stuck ? "sticking on the wall" : (flashing ? "impact!" : "free flight");
+  label.text = "τ = " + t.toFixed(2) + " s   " + what;
+}
+function reset() {
+  if (st.raf != null) cancelAnimationFrame(st.raf);
+  st.playing = false; st.raf = null; st.last = null; st.tprev = null;
+  play.label = "▶ Play";
+  slider.start = I.t0[0]; slider.end = I.t1[0];
+  slider.step = Math.max((I.t1[0] - I.t0[0]) / 20000, 1e-4);
+  if (slider.value === I.tshow[0]) draw(slider.value); else slider.value = I.tshow[0];
+}
+function frame(now) {
+  if (!st.playing) return;
+  if (st.last == null) st.last = now;
+  const el = now - st.last;
+  if (el >= 1000 / %(fps)d - 3) {
+    st.last = now;
+    let t = slider.value + Math.min(el, 200) / 1000 * parseFloat(speed.value);
+    if (t > slider.end) { t = slider.start; st.tprev = null; }
+    slider.value = t;
+  }
+  st.raf = requestAnimationFrame(frame);
+}
+if (st.ready == null || action === "reset") { st.ready = true; if (action !== "seek") reset(); }
+if (action === "seek") draw(slider.value);
+else if (action === "play") {
+  if (st.playing) {
+    st.playing = false; if (st.raf != null) cancelAnimationFrame(st.raf); st.raf = null;
+    play.label = "▶ Play";
+  } else {
+    st.playing = true; st.last = null; play.label = "⏸ Pause";
+    st.raf = requestAnimationFrame(frame);
+  }
+} else if (action === "step") {
+  st.playing = false; if (st.raf != null) cancelAnimationFrame(st.raf); st.raf = null;
+  play.label = "▶ Play";
+  slider.value = Math.min(slider.end, slider.value + parseFloat(speed.value) / %(fps)d);
+}
+""" % {"impact": IMPACT, "wall": WALL, "stick": STICK, "line": LINE, "fps": FPS}
+
+
+def _local(**data) -> ColumnDataSource:
+    """A source only the browser changes (never synced back to the server)."""
+    return ColumnDataSource(data, syncable=False)
+
+
+class AnimationView(View):
+    key = "animation"
+    note = ("The motion itself: the mass (blue) on its spring and damper, the wall at g "
+            "on the left, drawn to scale in x. Press play: the arrow is the force "
+            "cos ωτ, the wall flashes at each impact, the mass turns yellow while it "
+            "rests on the wall.")
+
+    def __init__(self):
+        self.info = ColumnDataSource({c: [] for c in ("g", "w", "xs", "d", "omega", "fs",
+                                                      "t0", "t1", "tshow")})
+        self.frame = ColumnDataSource({"xs": [], "ys": []})
+        self.wall_src = ColumnDataSource({"left": [], "right": [], "bottom": [], "top": []})
+        self.mass = _local(x=[], v=[], t=[], left=[], right=[], bottom=[], top=[])
+        self.spring = _local(x=[], y=[])
+        self.damper = _local(xs=[], ys=[])
+        self.force = _local(x0=[], x1=[], y=[], angle=[], size=[])
+        self.figure = fig = make_figure("animation_figure", "The motion", "displacement x",
+                                        "", x_range=Range1d(-1.0, 1.0, syncable=False),
+                                        y_range=Range1d(-0.75, 0.8, syncable=False),
+                                        tools="")
+        fig.toolbar_location = None
+        fig.yaxis.visible = False
+        fig.ygrid.visible = False
+        wall = fig.quad(left="left", right="right", bottom="bottom", top="top",
+                        source=self.wall_src, fill_color=WALL, line_color=WALL,
+                        hatch_pattern="/", hatch_color="white", name="animation_wall")
+        wall.glyph.syncable = False
+        fig.multi_line("xs", "ys", source=self.frame, line_color=WALL, line_width=2,
+                       name="animation_frame")
+        fig.line("x", "y", source=self.spring, line_color="#555555", line_width=2,
+                 name="animation_spring")
+        fig.multi_line("xs", "ys", source=self.damper, line_color="#555555", line_width=3,
+                       name="animation_damper")
+        body = fig.quad(left="left", right="right", bottom="bottom", top="top",
+                        source=self.mass, fill_color=LINE, line_color="#0b2f57",
+                        line_width=2, name="animation_mass")
+        body.glyph.syncable = False
+        fig.segment(x0="x0", y0="y", x1="x1", y1="y", source=self.force,
+                    line_color=IMPACT, line_width=3, name="animation_force")
+        fig.scatter(x="x1", y="y", angle="angle", source=self.force, marker="triangle",
+                    size=12, fill_color=IMPACT, line_color=IMPACT, name="animation_force_tip")
+        self.label = Label(x=8, y=8, x_units="screen", y_units="screen", text="",
+                           text_font_size="14px", syncable=False)
+        fig.add_layout(self.label)
+        fig.add_tools(HoverTool(renderers=[body], tooltips=[
+            ("τ", "@t{0.000} s"), ("x", "@x{0.0000}"), ("ẋ", "@v{0.0000}")]))
+        self.play = Button(label="▶ Play", width=84, css_classes=["ie-anim-play"],
+                           syncable=False, button_type="primary")
+        self.step = Button(label="Step ›", width=64, css_classes=["ie-anim-step"],
+                           syncable=False)
+        self.speed = Select(value="1", options=[(s, f"{s}×") for s in SPEEDS], width=64,
+                            css_classes=["ie-anim-speed"], syncable=False)
+        self.slider = Slider(start=0.0, end=1.0, value=0.0, step=0.01, title="",
+                             sizing_mode="stretch_width", css_classes=["ie-anim-time"],
+                             syncable=False, show_value=False, name="animation_time")
+        self._root = column(fig, row(self.play, self.step, self.speed, self.slider,
+                                     sizing_mode="stretch_width"),
+                            sizing_mode="stretch_both", name="animation_layout")
+        self._body_glyph = body.glyph
+        self._wall_glyph = wall.glyph
+
+    @property
+    def root(self):
+        return self._root
+
+    def connect(self, views: dict) -> None:
+        """Play from the displacement view's samples; move its cursor and the phase's."""
+        disp, phase = views["displacement"], views["phase"]
+        args = dict(src=disp.source, imp=disp.impacts, stick=disp.sticking, info=self.info,
+                    mass=self.mass, mass_glyph=self._body_glyph, spring=self.spring,
+                    damper=self.damper, force=self.force, wall=self._wall_glyph,
+                    label=self.label, dcur=disp.cursor, pcur=phase.cursor,
+                    slider=self.slider, play=self.play, speed=self.speed)
+
+        def js(action):
+            return CustomJS(args={**args, "action": action}, code=ANIMATE)
+        self.play.js_on_event("button_click", js("play"))
+        self.step.js_on_event("button_click", js("step"))
+        self.slider.js_on_change("value", js("seek"))
+        self.info.js_on_change("data", js("reset"))
+        self.ready = js("reset")
+
+    def present(self, presenter: bool) -> None:
+        style(self.figure, presenter)
+        self.label.text_font_size = "22px" if presenter else "14px"
+
+    def show_scene(self, scene: SceneData) -> None:
+        """Scale the drawing to the motion; the browser resets the player."""
+        run, tr = scene.run, scene.trajectory
+        g = run.params.g
+        x = np.asarray(tr["x"], dtype=float)
+        lo = min(g, float(np.min(x))) if x.size else g
+        hi = max(float(np.max(x)), g + 0.1) if x.size else g + 1.0
+        span = max(hi - lo, 0.2)
+        w, d = MASS_WIDTH * span, ROD * span
+        cyl = hi + w + 0.03 * span               # open end of the damper's cylinder
+        xs = hi + w + d + 0.12 * span            # support of the spring and the damper
+        wall_w = 0.05 * span
+        self.figure.x_range.update(start=lo - 1.5 * wall_w, end=xs + 0.04 * span)
+        self.wall_src.data = {"left": [g - wall_w], "right": [g], "bottom": [-0.6],
+                              "top": [0.6]}
+        self.frame.data = {  # support, damper cylinder (top, bottom, end), floor
+            "xs": [[xs, xs], [cyl, xs], [cyl, xs], [g, xs]],
+            "ys": [[-0.6, 0.6], [-0.09, -0.09], [-0.25, -0.25], [-0.6, -0.6]]}
+        t0, t1 = run.t_record, run.t_end
+        tshow = max(t0, t1 - 8 * run.params.T)
+        self.info.data = {"g": [g], "w": [w], "xs": [xs], "d": [d],
+                          "omega": [run.params.omega], "fs": [0.6 * span],
+                          "t0": [t0], "t1": [t1], "tshow": [tshow]}
+        self.figure.title.text = (f"The motion (ω = {run.params.omega:g}, "
+                                  f"T = {run.params.T:.4g} s): press play")
+
