@@ -262,11 +262,11 @@ class Controls:
             self.png_button, self.progress, self.diagram_status,
             sizing_mode="stretch_width", align_items="center", flex_wrap="wrap")
         self.grid = pn.Column(*(self._cell(v) for v in views), stylesheets=[GRID_CSS],
-                              sizing_mode="stretch_width", css_classes=["ie-grid"])
+                              sizing_mode="stretch_both", css_classes=["ie-grid"])
         main = pn.Column(header, self.message_pane, self.caption, self.badge, self.grid,
-                         self.accuracy_modal, stylesheets=[MAIN_CSS], sizing_mode="stretch_width",
+                         self.accuracy_modal, stylesheets=[MAIN_CSS], sizing_mode="stretch_both",
                          css_classes=["ie-main"])
-        return pn.Row(sidebar, main, sizing_mode="stretch_width", stylesheets=[PAGE_CSS],
+        return pn.Row(sidebar, main, sizing_mode="stretch_both", stylesheets=[PAGE_CSS],
                       css_classes=["ie-page"])
 
     # -- what the session shows --------------------------------------------------------

@@ -14,6 +14,7 @@ raises into Panel (no traceback in the server log).
 from __future__ import annotations
 
 import logging
+from urllib.parse import urlencode
 from concurrent.futures import ThreadPoolExecutor
 
 import panel as pn
@@ -236,4 +237,5 @@ class Explorer(pn.viewable.Viewer):
         loc = pn.state.location
         if loc is not None and self.run is not None and self._loaded:
             display = {n: getattr(self.settings, n) for n in state.DISPLAY_FIELDS}
-            loc.update_query(**state.to_query(self.run, self._scene_key, display))
+            # the whole query, so that a display setting back at its default leaves it
+            loc.search = "?" + urlencode(state.to_query(self.run, self._scene_key, display))

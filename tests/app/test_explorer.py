@@ -140,8 +140,42 @@ def test_every_scene_loads(make_explorer, key):
 
 
 def read_csv(buf):
-    rows = list(csv.reader(io.StringIO(buf.getvalue())))
+    lines = buf.getvalue().splitlines()
+    body = [line for line in lines if not line.startswith("#")]
+    rows = list(csv.reader(body))
     return rows[0], np.array(rows[1:], dtype=float)
+
+
+def csv_settings(buf) -> dict:
+    """The ``# name = value`` block at the top of a CSV download."""
+    out = {}
+    for line in buf.getvalue().splitlines():
+        if not line.startswith("#"):
+            break
+        name, _, value = line[1:].partition("=")
+        out[name.strip()] = value.strip()
+    return out
+
+
+def test_csv_files_start_with_the_settings_they_were_computed_with(make_explorer):
+    e = make_explorer(omega="2.81", r="0.6", c="0.07", g="0.1", m="1.5", k="2",
+                      t_end="400", t_record="300", method="rk45")
+    import importlib.metadata
+    for make in (e.downloads.impacts_csv, e.downloads.poincare_csv,
+                 e.downloads.bifurcation_csv):
+        buf = make()
+        got = csv_settings(buf)
+        assert list(got) == ["m", "c", "k", "g", "r", "omega", "psi", "t_end", "t_record",
+                             "method", "version"]
+        assert {n: float(got[n]) for n in ("m", "c", "k", "g", "r", "omega", "t_end",
+                                           "t_record")} == {
+            "m": 1.5, "c": 0.07, "k": 2.0, "g": 0.1, "r": 0.6, "omega": 2.81,
+            "t_end": 400.0, "t_record": 300.0}
+        assert float(got["psi"]) == 0.0 and got["method"] == "rk45"
+        assert got["version"] == importlib.metadata.version("impact-explorer")
+        # one header row follows, then numbers only
+        head, data = read_csv(buf)
+        assert len(head) == data.shape[1] and len(data) > 0
 
 
 def test_csv_downloads_hold_what_is_shown(make_explorer):

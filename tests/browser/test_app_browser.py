@@ -212,7 +212,8 @@ def test_accuracy_readout_and_csv_download(page, server):
         page.get_by_text("Impacts (CSV)").click()
     download = info.value
     assert download.suggested_filename == "impacts_omega2_r0.8_c0.05_g0.csv"
-    lines = Path(download.path()).read_text().splitlines()
+    lines = [line for line in Path(download.path()).read_text().splitlines()
+             if not line.startswith("#")]
     assert lines[0] == "t,phase,v_before,v_after"
     assert len(lines) - 1 == page.evaluate("ie.len('impact_map')")
 
