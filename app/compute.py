@@ -97,6 +97,46 @@ def trajectory_columns(sol: il.Solution, r: float, g: float) -> dict:
     return {"t": t, "x": x, "v": v}
 
 
+#: The time plot's samples for the window on screen: at least this many per forcing
+#: period (a smooth curve, and a faithful animation), at least two per pixel column...
+SAMPLES_PER_PERIOD = 48
+#: ...and at most this many; a wider window is drawn as its envelope (the lowest and
+#: highest x of each pixel column, from up to ENVELOPE_SAMPLES samples, under the
+#: scene limit SCENE_MAX_SAMPLES).
+MAX_WINDOW_SAMPLES = 24_000
+ENVELOPE_SAMPLES = 240_000
+
+
+def window_columns(run: Run, start: float, end: float, pixels: int) -> dict:
+    """x(t), v(t) on screen for the window [start, end] (clipped to the recorded one):
+    samples dense enough for the window and the screen, with the exact impact corners;
+    or, when that would exceed MAX_WINDOW_SAMPLES, the envelope per pixel column
+    (``v`` NaN: not a motion to animate). The run is the scene's own (same start, same
+    steps: its impacts are bit for bit those of the scene), simulated up to ``end``.
+    """
+    p = run.params
+    a, b = max(float(start), run.t_record), min(float(end), run.t_end)
+    pixels = int(min(max(pixels or 1000, 200), 4000))
+    if not b > a:
+        return {"t": np.zeros(0), "x": np.zeros(0), "v": np.zeros(0)}
+    n = int(max(SAMPLES_PER_PERIOD * (b - a) / p.T, 2 * pixels))
+    options = {**dict(run.scene_key()[1:]), "t_end": b, "t_record": a}
+    envelope = n > MAX_WINDOW_SAMPLES
+    sol = il.simulate(p, dense=min(n, ENVELOPE_SAMPLES),
+                      limits=scene_limits(options["method"]), **options)
+    cols = trajectory_columns(sol, p.r, p.g)
+    if not envelope:
+        return cols
+    t, x = cols["t"], cols["x"]
+    edges = np.linspace(a, b, pixels + 1)
+    col = np.clip(np.searchsorted(edges, t, side="right") - 1, 0, pixels - 1)
+    starts = np.flatnonzero(np.r_[True, col[1:] != col[:-1]])
+    lo, hi = np.minimum.reduceat(x, starts), np.maximum.reduceat(x, starts)
+    tc = 0.5 * (edges[col[starts]] + edges[col[starts] + 1])
+    return {"t": np.repeat(tc, 2), "x": np.column_stack((lo, hi)).ravel(),
+            "v": np.full(2 * tc.size, np.nan)}
+
+
 def last(a, n: int) -> np.ndarray:
     a = np.asarray(a, dtype=float)
     return a[-n:] if a.size > n else a

@@ -54,6 +54,7 @@ class Explorer(pn.viewable.Viewer):
         for view in self.views:
             setattr(self, view.key, view)
             view.request = self.request
+            view.request_window = self._request_window
         for view in self.views:
             view.connect({v.key: v for v in self.views})
             if view.ready is not None and doc is not None:
@@ -66,6 +67,8 @@ class Explorer(pn.viewable.Viewer):
         pool = None if doc is None else _SCENE_POOL
         self.scene_job = Job("scene", lambda run, t: compute.scene_and_section(run, self._shown), dispatch,
                              pool=pool, on_result=self._scene_done, show_stale=True)
+        self.window_job = Job("window", lambda req, t: compute.window_columns(*req), dispatch,
+                              pool=pool, on_result=self._window_done)
         self.runner = Job("diagram", self._follow_diagram, dispatch)
         self.accuracy_job = Job(
             "accuracy", lambda run, t: accuracy.to_html(accuracy.compare_methods(run)),
@@ -101,7 +104,7 @@ class Explorer(pn.viewable.Viewer):
 
     def _on_session_destroyed(self, session_context) -> None:
         """The tab is gone: stop its jobs and let the whole session be collected."""
-        for job in (self.scene_job, self.runner, self.accuracy_job):
+        for job in (self.scene_job, self.window_job, self.runner, self.accuracy_job):
             job.cancel()
         self.release_links()
 
@@ -168,6 +171,17 @@ class Explorer(pn.viewable.Viewer):
 
     def _follow_diagram(self, run, ticket) -> None:
         diagram.follow(run, ticket, self._on_chunk, self._on_done, self._on_diagram_error)
+
+    def _request_window(self, run, start, end, pixels) -> None:
+        """A view wants the time series of [start, end] of ``run`` (a zoom, a pan)."""
+        self.window_job.submit((run, start, end, pixels))
+
+    def _window_done(self, request, result) -> None:
+        if isinstance(result, Exception):
+            log.warning("window failed: %s: %s", type(result).__name__, result)
+            return
+        for view in self.views:
+            view.show_window(request[0], result)
 
     def _on_accuracy(self) -> None:
         self.controls.show_accuracy(None)

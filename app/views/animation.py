@@ -1,5 +1,5 @@
 """View 6: the motion animated — wall, spring, damper and mass drawn to scale in x,
-with play / pause, step, speed and a time slider over the recorded window.
+with play / pause, step, speed and a time slider over the window shown on x(t).
 
 Everything moves in the browser (``ANIMATE``, BokehJS): the frames are interpolated
 from the displacement view's dense samples (cubic Hermite in x with the sampled ẋ, so
@@ -85,13 +85,16 @@ function draw(t) {
   const what = stuck ? "sticking on the wall" : (flashing ? "impact!" : "free flight");
   label.text = "τ = " + t.toFixed(2) + " s   " + what;
 }
-function reset() {
+const coarse = src.data.v.length == 0 || !(src.data.v[0] === src.data.v[0]);
+function reset() {          // the time slider spans the samples of x(t) on screen
   if (st.raf != null) cancelAnimationFrame(st.raf);
   st.playing = false; st.raf = null; st.last = null; st.tprev = null;
   play.label = "▶ Play";
-  slider.start = I.t0[0]; slider.end = I.t1[0];
-  slider.step = Math.max((I.t1[0] - I.t0[0]) / 20000, 1e-4);
-  if (slider.value === I.tshow[0]) draw(slider.value); else slider.value = I.tshow[0];
+  const T = src.data.t, n = T.length;
+  if (n < 2 || coarse) { label.text = "zoom in on x(τ) to animate"; return; }
+  slider.start = T[0]; slider.end = T[n - 1];
+  slider.step = Math.max((T[n - 1] - T[0]) / 20000, 1e-4);
+  if (slider.value === T[0]) draw(slider.value); else slider.value = T[0];
 }
 function frame(now) {
   if (!st.playing) return;
@@ -106,6 +109,7 @@ function frame(now) {
   st.raf = requestAnimationFrame(frame);
 }
 if (st.ready == null || action === "reset") { st.ready = true; if (action !== "seek") reset(); }
+if (coarse) return;
 if (action === "seek") draw(slider.value);
 else if (action === "play") {
   if (st.playing) {
@@ -136,8 +140,7 @@ class AnimationView(View):
             "rests on the wall.")
 
     def __init__(self):
-        self.info = ColumnDataSource({c: [] for c in ("g", "w", "xs", "d", "omega", "fs",
-                                                      "t0", "t1", "tshow")})
+        self.info = ColumnDataSource({c: [] for c in ("g", "w", "xs", "d", "omega", "fs")})
         self.frame = ColumnDataSource({"xs": [], "ys": []})
         self.wall_src = ColumnDataSource({"left": [], "right": [], "bottom": [], "top": []})
         self.mass = _local(x=[], v=[], t=[], left=[], right=[], bottom=[], top=[])
@@ -208,6 +211,7 @@ class AnimationView(View):
         self.step.js_on_event("button_click", js("step"))
         self.slider.js_on_change("value", js("seek"))
         self.info.js_on_change("data", js("reset"))
+        disp.source.js_on_change("data", js("reset"))
         self.ready = js("reset")
 
     def present(self, presenter: bool) -> None:
@@ -232,11 +236,8 @@ class AnimationView(View):
         self.frame.data = {  # support, damper cylinder (top, bottom, end), floor
             "xs": [[xs, xs], [cyl, xs], [cyl, xs], [g, xs]],
             "ys": [[-0.6, 0.6], [-0.09, -0.09], [-0.25, -0.25], [-0.6, -0.6]]}
-        t0, t1 = run.t_record, run.t_end
-        tshow = max(t0, t1 - 8 * run.params.T)
         self.info.data = {"g": [g], "w": [w], "xs": [xs], "d": [d],
-                          "omega": [run.params.omega], "fs": [0.6 * span],
-                          "t0": [t0], "t1": [t1], "tshow": [tshow]}
+                          "omega": [run.params.omega], "fs": [0.6 * span]}
         self.figure.title.text = (f"The motion (ω = {run.params.omega:g}, "
                                   f"T = {run.params.T:.4g} s): press play")
 

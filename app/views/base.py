@@ -23,6 +23,9 @@ class View:
     ready = None
     #: Asks the session to change settings (``request(x0=…, v0=…)``); set by the session.
     request: Callable[..., None] = staticmethod(lambda **settings: None)
+    #: Asks the session for the time series of a window (``request_window(run, start,
+    #: end, pixels)``); set by the session.
+    request_window: Callable[..., None] = staticmethod(lambda run, start, end, pixels: None)
 
     @property
     def root(self):
@@ -39,6 +42,9 @@ class View:
 
     def show_scene(self, scene) -> None:
         """A new trajectory (``app.compute.SceneData``: run, trajectory, impacts)."""
+
+    def show_window(self, run, columns: dict) -> None:
+        """Samples (t, x, v) of the time window asked for with ``request_window``."""
 
     def show_section(self, run, section: dict) -> None:
         """A new Poincaré section (columns t, x, v) of ``run``."""

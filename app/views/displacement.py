@@ -1,7 +1,13 @@
 """View 1: displacement x(t) with the wall at g, the impacts marked and the sticking
-intervals shaded; the animation's time cursor moves on it."""
+intervals shaded; the animation's time cursor moves on it.
+
+The line is sampled for the window on screen: each zoom or pan asks the session for
+that window's samples (``app.compute.window_columns``: enough per period and per pixel,
+exact impact corners); until they arrive it shows the scene's own samples."""
 from __future__ import annotations
 
+from bokeh.core.property.descriptors import UnsetValueError
+from bokeh.events import RangesUpdate
 from bokeh.models import ColumnDataSource, HoverTool, Range1d, Span
 
 from ..compute import SceneData
@@ -46,6 +52,27 @@ class DisplacementView(View):
         auto_range_over(fig, line, dots)
         fig.add_tools(HoverTool(renderers=[line], mode="vline", tooltips=[
             ("τ", "@t{0.000} s"), ("x", "@x{0.0000}"), ("ẋ", "@v{0.0000}")]))
+        self.run = None
+        fig.on_event(RangesUpdate, self._on_ranges)
+
+    def _pixels(self) -> int:
+        """Width of the plot area in the browser (before the first render: a guess)."""
+        try:
+            return int(self.figure.inner_width)
+        except UnsetValueError:     # not rendered yet
+            return 1000
+
+    def _on_ranges(self, event) -> None:
+        if self.run is not None and event.x0 is not None and event.x1 is not None:
+            self.request_window(self.run, event.x0, event.x1, self._pixels())
+
+    def show_window(self, run, columns: dict) -> None:
+        if run is not self.run:
+            return
+        self.source.data = columns
+        envelope = len(columns["v"]) > 0 and columns["v"][0] != columns["v"][0]
+        self.figure.title.text = (f"Displacement x(τ), wall at g = {run.params.g:g}"
+                                  + (" — envelope: zoom in for the motion" if envelope else ""))
 
     def show_scene(self, scene: SceneData) -> None:
         g = scene.run.params.g
@@ -55,10 +82,11 @@ class DisplacementView(View):
         self.impacts.data = {"t": t, "x": [g] * len(t), "v": scene.impacts["v"]}
         self.sticking.data = dict(scene.sticking)
         self.wall.location = g
-        run = scene.run
+        self.run = run = scene.run
         start = max(run.t_record, run.t_end - PERIODS_SHOWN * run.params.T)
         self.figure.x_range.update(start=start, end=run.t_end, reset_start=start,
                                    reset_end=run.t_end)
         self.figure.title.text = f"Displacement x(τ), wall at g = {g:g}"
         self.figure.xaxis.axis_label = (f"time τ (s); zoom out: {run.t_record:g}–"
                                         f"{run.t_end:g} s")
+        self.request_window(run, start, run.t_end, self._pixels())

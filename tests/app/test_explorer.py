@@ -250,3 +250,42 @@ def test_accuracy_readout_reports_an_unstable_rk4_step():
     run = state.validate({**state.defaults(), "dt": 10.0})
     rk4 = accuracy.compare_methods(run)[1]
     assert rk4.method == "rk4" and "stability" in rk4.message
+
+
+def test_time_plot_is_sampled_for_the_window_on_screen(make_explorer):
+    """t_end = 20000 s: the scene's 4000 samples would be one per 5 s (T = 2.24 s).
+    The window shown gets >= 48 samples per period and every impact in it as an exact
+    corner (x = g at the scene's own impact times, bit for bit)."""
+    from app import compute
+    e = make_explorer(omega="2.81", t_end="20000", t_record="250")
+    T = e.run.params.T
+    t = np.asarray(e.displacement.source.data["t"])
+    assert t[0] == pytest.approx(20000 - 8 * T) and t[-1] == pytest.approx(20000)
+    assert np.max(np.diff(t)) <= T / compute.SAMPLES_PER_PERIOD * 1.001
+    cols = compute.window_columns(e.run, 19000.0, 19020.0, 800)
+    t, x = cols["t"], cols["x"]
+    imp = np.asarray(e.scene.impacts["t"])
+    inside = imp[(imp > 19000) & (imp < 19020)]
+    assert inside.size > 0
+    for ti in inside:
+        at = np.flatnonzero(t == ti)
+        assert at.size == 2 and np.all(x[at] == 0.0), ti    # the corner: (g, v-), (g, v+)
+    # zoomed all the way out: the envelope per pixel column, not a zig-zag
+    env = compute.window_columns(e.run, 250.0, 20000.0, 800)
+    assert len(env["t"]) <= 2 * 800 and np.all(np.isnan(env["v"]))
+    # it spans the motion: down to the wall, up to (within 27 samples per period of
+    # chord error, < 1 %) the highest x of the finely sampled 20 s above
+    assert env["x"].min() == 0.0 and env["x"].max() >= 0.99 * x.max()
+
+
+def test_window_samples_match_the_linear_closed_form(make_explorer):
+    """No impacts (wall far away): x(t) in a zoomed window is the steady state
+    X cos(ωt − φ) of the linear oscillator (the transient has decayed by e^-20)."""
+    from app import compute
+    m, c, k, w = 1.0, 0.05, 1.0, 1.3
+    e = make_explorer(g="-10", m=str(m), c=str(c), k=str(k), omega=str(w))
+    cols = compute.window_columns(e.run, 400.0, 420.0, 600)
+    X = 1 / math.hypot(k - m * w * w, 2 * c * w)
+    phi = math.atan2(2 * c * w, k - m * w * w)
+    assert len(cols["t"]) >= 20 / (2 * math.pi / w) * compute.SAMPLES_PER_PERIOD
+    assert np.allclose(cols["x"], X * np.cos(w * cols["t"] - phi), atol=1e-6)
