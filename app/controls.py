@@ -192,6 +192,11 @@ class Controls:
                                             css_classes=["ie-png"],
                                             description="All views as one PNG image")
         self.png_button.js_on_click(code=PNG_JS)
+        self.compare_toggle = pn.widgets.Toggle(label="Compare", width=100, margin=(4, 5),
+                                                css_classes=["ie-compare"])
+        self.pin_toggle = pn.widgets.Toggle(label="Pin maps", width=100, margin=(4, 5),
+                                            css_classes=["ie-pin"])
+        self._compare_panel = None
         self.layout = self._layout(views, downloads)
 
     def _scene_picked(self, event) -> None:
@@ -259,15 +264,33 @@ class Controls:
             pn.pane.HTML("<b style='font-size:17px'>Impact Explorer</b>", margin=(8, 5)),
             self.scene_select,
             *(self.widgets[s.name] for s in SETTINGS if s.group == "header"),
-            self.png_button, self.progress, self.diagram_status,
+            self.compare_toggle, self.pin_toggle, self.png_button, self.progress,
+            self.diagram_status,
             sizing_mode="stretch_width", align_items="center", flex_wrap="wrap")
         self.grid = pn.Column(*(self._cell(v) for v in views), stylesheets=[GRID_CSS],
                               sizing_mode="stretch_both", css_classes=["ie-grid"])
-        main = pn.Column(header, self.message_pane, self.caption, self.badge, self.grid,
+        self.main = main = pn.Column(header, self.message_pane, self.caption, self.badge, self.grid,
                          self.accuracy_modal, stylesheets=[MAIN_CSS], sizing_mode="stretch_both",
                          css_classes=["ie-main"])
         return pn.Row(sidebar, main, sizing_mode="stretch_both", stylesheets=[PAGE_CSS],
                       css_classes=["ie-page"])
+
+    def show_compare(self, root, visible: bool) -> None:
+        """The compare panel (built on first use) over the page, or hide it."""
+        if self._compare_panel is None:
+            if not visible:
+                return
+            close = pn.widgets.Button(label="Close", width=80, css_classes=["ie-compare-close"])
+            close.on_click(lambda event: setattr(self.compare_toggle, "value", False))
+            self._compare_panel = pn.Column(
+                pn.Row(pn.pane.Markdown(
+                    "### Side by side: Fig. 3 (a)–(f), diagrams for r = 0 … 0.9; Fig. 7 "
+                    "(a)–(d), Poincaré sections at ω = 2.8 — shared, fixed axes",
+                    margin=(0, 5)), close),
+                pn.pane.Bokeh(root, sizing_mode="stretch_width"),
+                stylesheets=[MODAL_CSS], css_classes=["ie-compare-panel"])
+            self.main.append(self._compare_panel)
+        self._compare_panel.visible = visible
 
     # -- what the session shows --------------------------------------------------------
 

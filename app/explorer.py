@@ -27,6 +27,9 @@ from .panel_fixes import release_links
 from .scenes import BY_KEY
 from .settings import QUERY_NAMES, Settings
 from .views import VIEWS
+from .views.compare import DIAGRAMS as COMPARE_DIAGRAMS
+from .views.compare import SECTIONS as COMPARE_SECTIONS
+from .views.compare import CompareView
 
 log = logging.getLogger(__name__)
 
@@ -74,6 +77,11 @@ class Explorer(pn.viewable.Viewer):
             "accuracy", lambda run, t: accuracy.to_html(accuracy.compare_methods(run)),
             dispatch, pool=None if doc is None else _ACCURACY_POOL,
             on_result=self._accuracy_done)
+        self.compare = None                 # CompareView, built when first opened
+        self.compare_jobs: list[Job] = []
+        self._dispatch = dispatch
+        c.compare_toggle.param.watch(lambda e: self.show_compare(e.new), "value")
+        c.pin_toggle.param.watch(lambda e: self.pin(e.new), "value")
         self.settings.param.watch(self._on_settings, [n for n in QUERY_NAMES
                                                       if n not in state.DISPLAY_FIELDS])
         self.settings.param.watch(self._on_display, list(state.DISPLAY_FIELDS))
@@ -104,7 +112,8 @@ class Explorer(pn.viewable.Viewer):
 
     def _on_session_destroyed(self, session_context) -> None:
         """The tab is gone: stop its jobs and let the whole session be collected."""
-        for job in (self.scene_job, self.window_job, self.runner, self.accuracy_job):
+        for job in (self.scene_job, self.window_job, self.runner, self.accuracy_job,
+                    *self.compare_jobs):
             job.cancel()
         self.release_links()
 
@@ -117,11 +126,61 @@ class Explorer(pn.viewable.Viewer):
         """Settings asked for by a view (a tap on the phase plane: x0, v0)."""
         self.settings.param.update(**values)
 
+    def pin(self, on: bool) -> None:
+        """Keep the maps shown now as a faint overlay (or drop it)."""
+        for view in self.views:
+            if hasattr(view, "pin"):
+                view.pin(on)
+
+    def show_compare(self, visible: bool) -> None:
+        """Open (building it the first time) or close compare mode. Its panels come from
+        the shared caches: the Fig. 3 diagrams from app.diagram's, the Fig. 7 sections
+        from app.compute's."""
+        if visible and self.compare is None:
+            self.compare = CompareView()
+            self.compare.present(self.settings.presenter)
+            pool = None if self._doc is None else _SCENE_POOL
+            runs = {k: state.validate({**state.defaults(), **BY_KEY[k].settings()})
+                    for k in (*COMPARE_DIAGRAMS, *COMPARE_SECTIONS)}
+            sections = Job("compare-sections",
+                           lambda rs, t: {k: compute.section_columns(r) for k, r in rs.items()},
+                           self._dispatch, pool=pool,
+                           on_result=lambda rs, result: self._compare_sections(result))
+            self.compare_jobs.append(sections)
+            for key in COMPARE_DIAGRAMS:
+                job = Job(f"compare-{key}", self._compare_follower(key), self._dispatch)
+                self.compare_jobs.append(job)
+                job.submit(runs[key])
+            sections.submit({k: runs[k] for k in COMPARE_SECTIONS})
+        if self.compare is not None:
+            self.controls.show_compare(self.compare.root, visible)
+
+    def _compare_follower(self, key: str):
+        view = self.compare
+
+        def done(info):
+            view.diagram_finished(key, "complete" if info["done"] >= info["total"]
+                                  else "partial (time limit)")
+
+        def work(run, ticket):
+            view.diagram_started(key)
+            diagram.follow(run, ticket, lambda part, d, n: view.diagram_chunk(key, part), done,
+                           lambda text: view.diagram_finished(key, "failed"))
+        return work
+
+    def _compare_sections(self, result) -> None:
+        if isinstance(result, Exception):
+            log.warning("compare sections failed: %s: %s", type(result).__name__, result)
+            return
+        self.compare.show_sections(result)
+
     def _on_display(self, *events) -> None:
         """Presenter mode on or off: type sizes and line widths of every view."""
         with pn.io.hold(self._doc):
             for view in self.views:
                 view.present(self.settings.presenter)
+            if self.compare is not None:
+                self.compare.present(self.settings.presenter)
             if events:
                 self._write_url()
 

@@ -289,3 +289,46 @@ def test_window_samples_match_the_linear_closed_form(make_explorer):
     phi = math.atan2(2 * c * w, k - m * w * w)
     assert len(cols["t"]) >= 20 / (2 * math.pi / w) * compute.SAMPLES_PER_PERIOD
     assert np.allclose(cols["x"], X * np.cos(w * cols["t"] - phi), atol=1e-6)
+
+
+def test_compare_mode_shows_fig3_and_fig7_on_shared_fixed_axes(make_explorer):
+    """Built only when opened; the six diagrams and four sections come from the shared
+    caches and fit the fixed axes; every panel of a figure shares its ranges."""
+    from app import compute, diagram, state as st
+    from app.scenes import BY_KEY as SC
+    from app.views import compare
+    e = make_explorer()
+    assert e.compare is None
+    e.controls.compare_toggle.value = True
+    for job in e.compare_jobs:
+        assert job.done.wait(120), job.name
+    diagrams = [e.compare.diagrams[k] for k in compare.DIAGRAMS]
+    assert len({id(f.x_range) for _, f in diagrams}) == 1
+    assert len({id(f.y_range) for _, f in diagrams}) == 1
+    lo, hi = compare.V_RANGE
+    for key, (src, fig) in zip(compare.DIAGRAMS, diagrams):
+        v = np.asarray(src.data["v"])
+        assert v.size > 100 and lo <= v.min() and v.max() <= hi, (key, v.min(), v.max())
+        run = st.validate({**st.defaults(), **SC[key].settings()})
+        assert run.diagram_key() in diagram.CACHE          # computed once, shared
+        assert (fig.y_range.start, fig.y_range.end) == compare.V_RANGE   # fixed
+    for key in compare.SECTIONS:
+        src, fig = e.compare.sections[key]
+        run = st.validate({**st.defaults(), **SC[key].settings()})
+        ref = compute.section_columns(run)
+        assert np.array_equal(src.data["x"], ref["x"]) and len(ref["x"]) > 50
+        assert compare.SECTION_X[0] <= min(ref["x"]) and max(ref["x"]) <= compare.SECTION_X[1]
+        assert compare.SECTION_V[0] <= min(ref["v"]) and max(ref["v"]) <= compare.SECTION_V[1]
+    e.controls.compare_toggle.value = False
+
+
+def test_pin_keeps_the_maps_as_an_overlay(make_explorer):
+    e = make_explorer()
+    before = np.asarray(e.impact_map.source.data["v"]).copy()
+    e.controls.pin_toggle.value = True
+    e.settings.omega = 2.5
+    e.scene_job.done.wait(30)
+    assert np.array_equal(e.impact_map.pinned.data["v"], before)
+    assert not np.array_equal(e.impact_map.source.data["v"], before)
+    e.controls.pin_toggle.value = False
+    assert len(e.impact_map.pinned.data["v"]) == 0 and len(e.poincare.pinned.data["x"]) == 0
