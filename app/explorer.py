@@ -179,6 +179,8 @@ class Explorer(pn.viewable.Viewer):
         with pn.io.hold(self._doc):
             for view in self.views:
                 view.present(self.settings.presenter)
+            if events or self.settings.presenter:   # a projector: plots take the width
+                self.controls.sidebar_toggle.value = not self.settings.presenter
             if self.compare is not None:
                 self.compare.present(self.settings.presenter)
             if events:

@@ -42,6 +42,8 @@ def style(fig, presenter: bool) -> None:
     for axis in fig.xaxis + fig.yaxis:
         axis.major_label_text_font_size = ticks
         axis.axis_label_text_font_size = labels
+        if hasattr(axis.ticker, "desired_num_ticks"):   # large labels need room
+            axis.ticker.desired_num_ticks = 4 if presenter else 6
     base = _BASE.setdefault(fig, {})
     for r in fig.renderers:
         if not isinstance(r, GlyphRenderer):

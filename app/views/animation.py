@@ -29,11 +29,15 @@ SPEEDS = ("0.1", "0.25", "0.5", "1", "2", "5", "10")
 MASS_WIDTH, ROD = 0.14, 1.08
 
 ANIMATE = """
+const origin = cb_obj.origin || cb_obj;      // a button's click event, or a model
+const action = origin === play ? "play" : origin === step ? "step"
+             : origin === slider ? "seek" : origin === src ? "data" : "reset";
 const st = mass.__ie || (mass.__ie = {playing: false, raf: null, last: null, tprev: null,
                                       flash: 0, stuck: null, flashing: null});
 const I = info.data;
 if (!I.g || I.g.length == 0) return;
 const g = I.g[0], w = I.w[0], xs = I.xs[0], d = I.d[0], omega = I.omega[0], fs = I.fs[0];
+const cyl = I.cyl[0], lw = I.lw[0], hs = I.hs[0];
 
 function bsearch(a, t) {          // last index with a[i] <= t (-1: none)
   let lo = 0, hi = a.length - 1, ans = -1;
@@ -61,11 +65,21 @@ function draw(t) {
   const sx = [a, a + 0.1 * L], sy = [0.15, 0.15], N = 10;
   for (let k = 1; k < N; k++) { sx.push(a + 0.1 * L + 0.8 * L * k / N); sy.push(k %% 2 ? 0.24 : 0.06); }
   sx.push(a + 0.9 * L, xs); sy.push(0.15, 0.15);
-  spring.data = {x: sx, y: sy};
-  damper.data = {xs: [[a, a + d], [a + d, a + d]], ys: [[-0.17, -0.17], [-0.23, -0.11]]};
-  const F = Math.cos(omega * t), cx = x + 0.5 * w, tip = cx + F * fs;
-  force.data = {x0: [cx], x1: [tip], y: [0.5], angle: [F >= 0 ? -Math.PI / 2 : Math.PI / 2],
-                size: [Math.abs(F) > 0.05 ? 1 : 0]};
+  const F = Math.cos(omega * t), cx = x + 0.5 * w, tip = cx + F * fs, s = F >= 0 ? -1 : 1;
+  const lines = [  // [xs, ys, colour, width]
+    [[xs, xs], [-0.6, 0.6], "%(wall)s", 2],                 // support
+    [[cyl, xs], [-0.09, -0.09], "%(wall)s", 2],             // damper cylinder
+    [[cyl, xs], [-0.25, -0.25], "%(wall)s", 2],
+    [[g, xs], [-0.6, -0.6], "%(wall)s", 2],                 // floor
+    [sx, sy, "#555555", 2],                                 // spring
+    [[a, a + d], [-0.17, -0.17], "#555555", 3],             // damper rod and piston
+    [[a + d, a + d], [-0.23, -0.11], "#555555", 3],
+  ];
+  if (Math.abs(F) > 0.05)                                   // the force cos(omega t)
+    lines.push([[cx, tip], [0.5, 0.5], "%(impact)s", 3],
+               [[tip + s * hs, tip, tip + s * hs], [0.58, 0.5, 0.42], "%(impact)s", 3]);
+  lines_src.data = {xs: lines.map((l) => l[0]), ys: lines.map((l) => l[1]),
+                    color: lines.map((l) => l[2]), width: lines.map((l) => l[3] * lw)};
   dcur.data = {t: [t], x: [x]};
   pcur.data = {x: [x], v: [v]};
   // impacts between the previous frame and this one flash the wall
@@ -108,7 +122,18 @@ function frame(now) {
   }
   st.raf = requestAnimationFrame(frame);
 }
-if (st.ready == null || action === "reset") { st.ready = true; if (action !== "seek") reset(); }
+function refit() {          // new samples of x(t) on screen: keep playing through them
+  const T = src.data.t, n = T.length;
+  if (n < 2 || coarse) { reset(); return; }
+  slider.start = T[0]; slider.end = T[n - 1];
+  const t = Math.min(Math.max(slider.value, T[0]), T[n - 1]);
+  if (t === slider.value) draw(t); else slider.value = t;
+}
+if (action === "data" && st.ready != null) { refit(); return; }
+if (st.ready == null || action === "reset" || action === "data") {
+  st.ready = true;
+  if (action !== "seek") reset();
+}
 if (coarse) return;
 if (action === "seek") draw(slider.value);
 else if (action === "play") {
@@ -127,6 +152,11 @@ else if (action === "play") {
 """ % {"impact": IMPACT, "wall": WALL, "stick": STICK, "line": LINE, "fps": FPS}
 
 
+#: Scene constants the browser draws with: wall at g, mass width, support, damper rod and
+#: cylinder, ω, force arrow scale and head, line width factor (presenter mode).
+INFO = ("g", "w", "xs", "d", "cyl", "omega", "fs", "hs", "lw")
+
+
 def _local(**data) -> ColumnDataSource:
     """A source only the browser changes (never synced back to the server)."""
     return ColumnDataSource(data, syncable=False)
@@ -140,16 +170,14 @@ class AnimationView(View):
             "rests on the wall.")
 
     def __init__(self):
-        self.info = ColumnDataSource({c: [] for c in ("g", "w", "xs", "d", "omega", "fs")})
-        self.frame = ColumnDataSource({"xs": [], "ys": []})
+        self.info = ColumnDataSource({c: [] for c in INFO})
         self.wall_src = ColumnDataSource({"left": [], "right": [], "bottom": [], "top": []})
         self.mass = _local(x=[], v=[], t=[], left=[], right=[], bottom=[], top=[])
-        self.spring = _local(x=[], y=[])
-        self.damper = _local(xs=[], ys=[])
-        self.force = _local(x0=[], x1=[], y=[], angle=[], size=[])
+        self.lines = _local(xs=[], ys=[], color=[], width=[])
+        self._presenter = False
         self.figure = fig = make_figure("animation_figure", "The motion", "displacement x",
                                         "", x_range=Range1d(-1.0, 1.0, syncable=False),
-                                        y_range=Range1d(-0.75, 0.8, syncable=False),
+                                        y_range=Range1d(-1.0, 0.75, syncable=False),
                                         tools="")
         fig.toolbar_location = None
         fig.yaxis.visible = False
@@ -158,25 +186,18 @@ class AnimationView(View):
                         source=self.wall_src, fill_color=WALL, line_color=WALL,
                         hatch_pattern="/", hatch_color="white", name="animation_wall")
         wall.glyph.syncable = False
-        fig.multi_line("xs", "ys", source=self.frame, line_color=WALL, line_width=2,
-                       name="animation_frame")
-        fig.line("x", "y", source=self.spring, line_color="#555555", line_width=2,
-                 name="animation_spring")
-        fig.multi_line("xs", "ys", source=self.damper, line_color="#555555", line_width=3,
-                       name="animation_damper")
+        fig.multi_line("xs", "ys", source=self.lines, line_color="color", line_width="width",
+                       name="animation_lines")
         body = fig.quad(left="left", right="right", bottom="bottom", top="top",
                         source=self.mass, fill_color=LINE, line_color="#0b2f57",
                         line_width=2, name="animation_mass")
         body.glyph.syncable = False
-        fig.segment(x0="x0", y0="y", x1="x1", y1="y", source=self.force,
-                    line_color=IMPACT, line_width=3, name="animation_force")
-        fig.scatter(x="x1", y="y", angle="angle", source=self.force, marker="triangle",
-                    size=12, fill_color=IMPACT, line_color=IMPACT, name="animation_force_tip")
         self.label = Label(x=8, y=8, x_units="screen", y_units="screen", text="",
                            text_font_size="14px", syncable=False)
         fig.add_layout(self.label)
         fig.add_tools(HoverTool(renderers=[body], tooltips=[
             ("τ", "@t{0.000} s"), ("x", "@x{0.0000}"), ("ẋ", "@v{0.0000}")]))
+        fig.toolbar_location = None
         self.play = Button(label="▶ Play", width=84, css_classes=["ie-anim-play"],
                            syncable=False, button_type="primary")
         self.step = Button(label="Step ›", width=64, css_classes=["ie-anim-step"],
@@ -199,24 +220,24 @@ class AnimationView(View):
     def connect(self, views: dict) -> None:
         """Play from the displacement view's samples; move its cursor and the phase's."""
         disp, phase = views["displacement"], views["phase"]
-        args = dict(src=disp.source, imp=disp.impacts, stick=disp.sticking, info=self.info,
-                    mass=self.mass, mass_glyph=self._body_glyph, spring=self.spring,
-                    damper=self.damper, force=self.force, wall=self._wall_glyph,
-                    label=self.label, dcur=disp.cursor, pcur=phase.cursor,
-                    slider=self.slider, play=self.play, speed=self.speed)
-
-        def js(action):
-            return CustomJS(args={**args, "action": action}, code=ANIMATE)
-        self.play.js_on_event("button_click", js("play"))
-        self.step.js_on_event("button_click", js("step"))
-        self.slider.js_on_change("value", js("seek"))
-        self.info.js_on_change("data", js("reset"))
-        disp.source.js_on_change("data", js("reset"))
-        self.ready = js("reset")
+        callback = CustomJS(code=ANIMATE, args=dict(
+            src=disp.source, imp=disp.impacts, stick=disp.sticking, info=self.info,
+            mass=self.mass, mass_glyph=self._body_glyph, lines_src=self.lines,
+            wall=self._wall_glyph, label=self.label, dcur=disp.cursor, pcur=phase.cursor,
+            slider=self.slider, play=self.play, step=self.step, speed=self.speed))
+        self.play.js_on_event("button_click", callback)
+        self.step.js_on_event("button_click", callback)
+        self.slider.js_on_change("value", callback)
+        self.info.js_on_change("data", callback)
+        disp.source.js_on_change("data", callback)
+        self.ready = callback
 
     def present(self, presenter: bool) -> None:
         style(self.figure, presenter)
         self.label.text_font_size = "22px" if presenter else "14px"
+        self._presenter = presenter
+        if self.info.data["g"]:
+            self.info.data = {**self.info.data, "lw": [2.0 if presenter else 1.0]}
 
     def show_scene(self, scene: SceneData) -> None:
         """Scale the drawing to the motion; the browser resets the player."""
@@ -233,11 +254,8 @@ class AnimationView(View):
         self.figure.x_range.update(start=lo - 1.5 * wall_w, end=xs + 0.04 * span)
         self.wall_src.data = {"left": [g - wall_w], "right": [g], "bottom": [-0.6],
                               "top": [0.6]}
-        self.frame.data = {  # support, damper cylinder (top, bottom, end), floor
-            "xs": [[xs, xs], [cyl, xs], [cyl, xs], [g, xs]],
-            "ys": [[-0.6, 0.6], [-0.09, -0.09], [-0.25, -0.25], [-0.6, -0.6]]}
-        self.info.data = {"g": [g], "w": [w], "xs": [xs], "d": [d],
-                          "omega": [run.params.omega], "fs": [0.6 * span]}
-        self.figure.title.text = (f"The motion (ω = {run.params.omega:g}, "
-                                  f"T = {run.params.T:.4g} s): press play")
+        self.info.data = {"g": [g], "w": [w], "xs": [xs], "d": [d], "cyl": [cyl],
+                          "omega": [run.params.omega], "fs": [0.6 * span],
+                          "hs": [0.06 * span], "lw": [2.0 if self._presenter else 1.0]}
+        self.figure.title.text = f"The motion, ω = {run.params.omega:g}"
 

@@ -47,12 +47,11 @@ class DisplacementView(View):
                            name="displacement_impacts")
         fig.vspan(x="t", source=self.cursor, line_color="#2a9d8f", line_width=2,
                   line_alpha=0.8, name="displacement_cursor")
-        fig.scatter("t", "x", source=self.cursor, size=9, color="#2a9d8f",
-                    name="displacement_cursor_dot")
         auto_range_over(fig, line, dots)
         fig.add_tools(HoverTool(renderers=[line], mode="vline", tooltips=[
             ("τ", "@t{0.000} s"), ("x", "@x{0.0000}"), ("ẋ", "@v{0.0000}")]))
         self.run = None
+        self._asked = None
         fig.on_event(RangesUpdate, self._on_ranges)
 
     def _pixels(self) -> int:
@@ -63,16 +62,23 @@ class DisplacementView(View):
             return 1000
 
     def _on_ranges(self, event) -> None:
-        if self.run is not None and event.x0 is not None and event.x1 is not None:
-            self.request_window(self.run, event.x0, event.x1, self._pixels())
+        if self.run is None or event.x0 is None or event.x1 is None:
+            return
+        window = (self.run, event.x0, event.x1, self._pixels())
+        if window != self._asked:
+            self._ask(*window)
+
+    def _ask(self, *window) -> None:
+        self._asked = window
+        self.request_window(*window)
 
     def show_window(self, run, columns: dict) -> None:
         if run is not self.run:
             return
         self.source.data = columns
         envelope = len(columns["v"]) > 0 and columns["v"][0] != columns["v"][0]
-        self.figure.title.text = (f"Displacement x(τ), wall at g = {run.params.g:g}"
-                                  + (" — envelope: zoom in for the motion" if envelope else ""))
+        self.figure.title.text = ("Displacement x(τ)"
+                                  + (", envelope: zoom in" if envelope else ""))
 
     def show_scene(self, scene: SceneData) -> None:
         g = scene.run.params.g
@@ -86,7 +92,7 @@ class DisplacementView(View):
         start = max(run.t_record, run.t_end - PERIODS_SHOWN * run.params.T)
         self.figure.x_range.update(start=start, end=run.t_end, reset_start=start,
                                    reset_end=run.t_end)
-        self.figure.title.text = f"Displacement x(τ), wall at g = {g:g}"
+        self.figure.title.text = "Displacement x(τ)"
         self.figure.xaxis.axis_label = (f"time τ (s); zoom out: {run.t_record:g}–"
                                         f"{run.t_end:g} s")
-        self.request_window(run, start, run.t_end, self._pixels())
+        self._ask(run, start, run.t_end, self._pixels())

@@ -15,12 +15,10 @@ class ImpactMapView(View):
 
     def __init__(self):
         self.source = ColumnDataSource({"phase": [], "v": [], "t": []})
-        self.pinned = ColumnDataSource({"phase": [], "v": []})
+        self.pinned = None        # the overlay's source, made on the first pin
         self.figure = make_figure("impact_map_figure", "Impact map",
                                   "impact phase τ_I mod T (s)", "impact velocity ẋ(τ_I−)",
                                   x_range=Range1d(0.0, 3.14159), y_range=Range1d(-1.0, 0.0))
-        self.figure.scatter("phase", "v", source=self.pinned, size=5, color="#999999",
-                            alpha=0.35, name="impact_map_pinned")
         dots = self.figure.scatter("phase", "v", source=self.source, size=5, color=IMPACT,
                                    alpha=0.8, name="impact_map")
         self.figure.add_tools(HoverTool(renderers=[dots], tooltips=[
@@ -28,7 +26,14 @@ class ImpactMapView(View):
             ("impact velocity", "@v{0.0000}")]))
 
     def pin(self, on: bool) -> None:
-        """Keep the impacts shown now as a faint overlay (False: drop it)."""
+        """Keep the points shown now as a faint overlay (False: drop it)."""
+        if self.pinned is None:
+            if not on:
+                return
+            self.pinned = ColumnDataSource({"phase": [], "v": []})
+            r = self.figure.scatter("phase", "v", source=self.pinned, size=5,
+                                    color="#999999", alpha=0.35, name="impact_map_pinned")
+            self.figure.renderers = [r] + [x for x in self.figure.renderers if x is not r]
         self.pinned.data = ({"phase": self.source.data["phase"], "v": self.source.data["v"]}
                             if on else {"phase": [], "v": []})
 
@@ -38,5 +43,4 @@ class ImpactMapView(View):
         T = scene.run.params.T
         set_range(self.figure.x_range, 0.0, T)
         set_range(self.figure.y_range, *padded(imp["v"], include=(0.0,)))
-        n = len(imp["t"])
-        self.figure.title.text = f"Impact map — {n} impacts, T = {T:.4g} s"
+        self.figure.title.text = f"Impact map, T = {T:.4g} s"

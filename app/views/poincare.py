@@ -18,12 +18,10 @@ class PoincareView(View):
 
     def __init__(self):
         self.source = ColumnDataSource({"x": [], "v": [], "t": []})
-        self.pinned = ColumnDataSource({"x": [], "v": []})
+        self.pinned = None        # the overlay's source, made on the first pin
         self.figure = make_figure("poincare_figure", "Poincaré map", "displacement x",
                                   "velocity ẋ", x_range=Range1d(-1.0, 1.0),
                                   y_range=Range1d(-1.0, 1.0))
-        self.figure.scatter("x", "v", source=self.pinned, size=5, color="#999999",
-                            alpha=0.35, name="poincare_pinned")
         dots = self.figure.scatter("x", "v", source=self.source, size=5, color=LINE,
                                    alpha=0.8, name="poincare")
         self.figure.add_tools(HoverTool(renderers=[dots], tooltips=[
@@ -33,6 +31,13 @@ class PoincareView(View):
 
     def pin(self, on: bool) -> None:
         """Keep the points shown now as a faint overlay (False: drop it)."""
+        if self.pinned is None:
+            if not on:
+                return
+            self.pinned = ColumnDataSource({"x": [], "v": []})
+            r = self.figure.scatter("x", "v", source=self.pinned, size=5,
+                                    color="#999999", alpha=0.35, name="poincare_pinned")
+            self.figure.renderers = [r] + [x for x in self.figure.renderers if x is not r]
         self.pinned.data = ({"x": self.source.data["x"], "v": self.source.data["v"]}
                             if on else {"x": [], "v": []})
 
@@ -41,5 +46,4 @@ class PoincareView(View):
         self.source.data = {"x": section["x"], "v": section["v"], "t": section["t"]}
         set_range(self.figure.x_range, *padded(section["x"]))
         set_range(self.figure.y_range, *padded(section["v"]))
-        self.figure.title.text = (f"Poincaré map at ψ = {run.psi_frac:.3g} T = "
-                                  f"{run.psi:.4g} s ({len(section['x'])})")
+        self.figure.title.text = f"Poincaré map, ψ = {run.psi_frac:.3g} T"

@@ -145,7 +145,7 @@ def test_scene_menu_loads_its_settings(page, server):
     page.locator(".ie-scene-select select").select_option(label="Fig 7b · ψ=3T/8")
     page.wait_for_function("() => Math.abs(ie.model('bifurcation_marker').location - 2.8) < 1e-9",
                            timeout=10_000)
-    page.wait_for_function("() => ie.title('poincare_figure').startsWith('Poincaré map at ψ = 0.375 T')",
+    page.wait_for_function("() => ie.title('poincare_figure').startsWith('Poincaré map, ψ = 0.375 T')",
                            timeout=10_000)
     assert page.locator(".ie-w-omega input").first.input_value() == "2.800"
     assert "Fig. 7(b)" in text(page, "ie-caption")

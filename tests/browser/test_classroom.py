@@ -138,6 +138,11 @@ def test_play_moves_the_mass_with_no_message_from_the_server(page, server):
     x_paused = page.evaluate(MASS_X)
     page.wait_for_timeout(500)
     assert page.evaluate(MASS_X) == x_paused
+    t_paused = page.evaluate("() => ie.data('animation_mass').t[0]")
+    page.locator(".ie-anim-step button").click()         # one frame at 1x: 1/30 s
+    page.wait_for_function(f"() => ie.data('animation_mass').t[0] > {t_paused}", timeout=2_000)
+    assert page.evaluate("() => ie.data('animation_mass').t[0]") - t_paused == \
+        pytest.approx(1 / 30, rel=1e-6)
 
 
 def test_fig4_animation_rests_on_the_wall_while_sticking(page, server):
