@@ -52,6 +52,7 @@ MAIN_CSS = """
 }
 """
 GRID_CSS = """
+.scroll-button { display: none !important; }
 :host { display: grid !important; grid-template-columns: repeat(3, minmax(0, 1fr));
         grid-template-rows: repeat(2, minmax(0, 1fr)); gap: 6px; flex: 1 1 0%;
         min-height: 0; width: 100%; }
