@@ -22,7 +22,7 @@ import panel as pn
 from . import accuracy, compute, diagram, state
 from .controls import Controls
 from .downloads import Downloads
-from .jobs import Job, session_dispatcher, session_doc
+from .jobs import Job, SessionLoop, session_doc
 from .panel_fixes import release_links
 from .scenes import BY_KEY
 from .settings import QUERY_NAMES, Settings
@@ -51,7 +51,7 @@ class Explorer(pn.viewable.Viewer):
         self._keep_message = True         # the link's message stays until a user change
         self._restoring = False           # falling back to defaults (not a user change)
         doc = self._doc = session_doc()
-        dispatch = session_dispatcher(doc)
+        dispatch = self._loop = SessionLoop(doc)
         self._loaded = doc is None        # served: the diagram starts once the page is up
         self.views = [cls() for cls in VIEWS]
         for view in self.views:
@@ -115,6 +115,7 @@ class Explorer(pn.viewable.Viewer):
         for job in (self.scene_job, self.window_job, self.runner, self.accuracy_job,
                     *self.compare_jobs):
             job.cancel()
+        self._loop.close()
         self.release_links()
 
     def release_links(self) -> None:
@@ -217,6 +218,8 @@ class Explorer(pn.viewable.Viewer):
         self.scene_job.submit(run)
 
     def _on_load(self) -> None:
+        """The page is up: results computed so far go out now, the diagram starts."""
+        self._loop.ready()
         with pn.io.hold(self._doc):
             self._loaded = True
             self._restart_diagram(self._wanted)

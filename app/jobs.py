@@ -33,18 +33,52 @@ def session_doc():
     return doc if doc is not None and doc.session_context is not None else None
 
 
-def session_dispatcher(doc):
-    """Run a function on the session's event loop (safe from any thread), holding the
-    document so that all its model changes go out in one message."""
-    if doc is None:
-        return lambda fn: fn()
+class SessionLoop:
+    """``loop(fn)`` runs ``fn`` on the session's event loop (safe from any thread),
+    holding the document so that all its model changes go out in one message; without
+    a server (``doc`` None) it runs ``fn`` at once.
 
-    def dispatch(fn):
-        def held():
-            with set_curdoc(doc), pn.io.hold(doc):
+    Nothing runs before ``ready()`` (call it from ``pn.state.onload``): Panel 1.9.4
+    drops model changes made between the page's document pull and its "document ready"
+    (``panel.io.document.hold`` discards them while the session is not connected,
+    counting on the full document it serves), so a result applied in that gap would
+    never reach the page. Until then, functions wait in order and run at ``ready()``.
+    """
+
+    def __init__(self, doc):
+        self.doc = doc
+        self._ready = doc is None
+        self._waiting: list[Callable[[], None]] = []
+        self._lock = threading.Lock()
+
+    def __call__(self, fn: Callable[[], None]) -> None:
+        if self.doc is None:
+            fn()
+            return
+        with self._lock:
+            if not self._ready:
+                self._waiting.append(fn)
+                return
+        self.doc.add_next_tick_callback(lambda: self._run([fn]))
+
+    def ready(self) -> None:
+        """The page is up: run what waited, and from now on run at the next tick."""
+        with self._lock:
+            self._ready = True
+            waiting, self._waiting = self._waiting, []
+        self._run(waiting)
+
+    def close(self) -> None:
+        """The session is gone: forget what waits."""
+        with self._lock:
+            self._waiting.clear()
+
+    def _run(self, fns) -> None:
+        if not fns:
+            return
+        with set_curdoc(self.doc), pn.io.hold(self.doc):
+            for fn in fns:
                 fn()
-        doc.add_next_tick_callback(held)
-    return dispatch
 
 
 class Ticket:
