@@ -110,13 +110,14 @@ function reset() {          // the time slider spans the samples of x(t) on scre
   slider.step = Math.max((T[n - 1] - T[0]) / 20000, 1e-4);
   if (slider.value === T[0]) draw(slider.value); else slider.value = T[0];
 }
-function frame(now) {
+function frame(now) {       // frames on a fixed 1/FPS schedule, time advanced by the clock
   if (!st.playing) return;
-  if (st.last == null) st.last = now;
-  const el = now - st.last;
-  if (el >= 1000 / %(fps)d - 3) {
+  if (st.last == null) { st.last = now; st.next = now; }
+  if (now >= st.next - 2) {
+    st.next = now - st.next > 100 ? now + 1000 / %(fps)d : st.next + 1000 / %(fps)d;
+    const el = Math.min(now - st.last, 200);
     st.last = now;
-    let t = slider.value + Math.min(el, 200) / 1000 * parseFloat(speed.value);
+    let t = slider.value + el / 1000 * parseFloat(speed.value);
     if (t > slider.end) { t = slider.start; st.tprev = null; }
     slider.value = t;
   }

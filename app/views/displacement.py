@@ -45,8 +45,9 @@ class DisplacementView(View):
                         name="displacement")
         dots = fig.scatter("t", "x", source=self.impacts, size=4, color=IMPACT,
                            name="displacement_impacts")
+        # on the overlay layer: a frame of the animation repaints the cursor, not x(t)
         fig.vspan(x="t", source=self.cursor, line_color="#2a9d8f", line_width=2,
-                  line_alpha=0.8, name="displacement_cursor")
+                  line_alpha=0.8, name="displacement_cursor", level="overlay")
         auto_range_over(fig, line, dots)
         fig.add_tools(HoverTool(renderers=[line], mode="vline", tooltips=[
             ("τ", "@t{0.000} s"), ("x", "@x{0.0000}"), ("ẋ", "@v{0.0000}")]))

@@ -332,3 +332,30 @@ def test_pin_keeps_the_maps_as_an_overlay(make_explorer):
     assert not np.array_equal(e.impact_map.source.data["v"], before)
     e.controls.pin_toggle.value = False
     assert len(e.impact_map.pinned.data["v"]) == 0 and len(e.poincare.pinned.data["x"]) == 0
+
+
+def test_every_scene_view_has_a_hover_readout(make_explorer):
+    from bokeh.models import HoverTool
+    e = make_explorer()
+    for view in (e.displacement, e.phase, e.impact_map, e.poincare, e.animation):
+        hovers = [t for t in view.figure.tools if isinstance(t, HoverTool)]
+        assert hovers, view.key
+        for h in hovers:     # each reads a renderer of its own figure
+            assert h.renderers and all(r in view.figure.renderers for r in h.renderers)
+
+
+@pytest.mark.parametrize("view_key", ["phase", "poincare"])
+def test_tap_starts_the_motion_there(make_explorer, view_key):
+    """A tap at (x, ẋ) sets x0, v0 (4 significant digits); beyond the wall x0 = g."""
+    from types import SimpleNamespace
+    from bokeh.events import Tap
+    e = make_explorer(g="0.25")
+    fig = getattr(e, view_key).figure
+    handler = fig._event_callbacks[Tap.event_name][0]
+    handler(SimpleNamespace(x=0.73214, y=-0.41236))
+    e.scene_job.done.wait(30)
+    assert (e.settings.x0, e.settings.v0) == (0.7321, -0.4124)
+    assert (e.run.x0, e.run.v0) == (0.7321, -0.4124)
+    handler(SimpleNamespace(x=0.1, y=0.5))             # x < g = 0.25
+    e.scene_job.done.wait(30)
+    assert (e.run.x0, e.run.v0) == (0.25, 0.5)
