@@ -11,7 +11,7 @@ from __future__ import annotations
 import panel as pn
 import param
 
-from .panel_fixes import PromptFloatSlider
+from .panel_fixes import GRID_COLUMN_CSS, PromptFloatSlider
 from .scenes import SCENES
 from .settings import SETTINGS
 
@@ -52,7 +52,6 @@ MAIN_CSS = """
 }
 """
 GRID_CSS = """
-.scroll-button { display: none !important; }
 :host { display: grid !important; grid-template-columns: repeat(3, minmax(0, 1fr));
         grid-template-rows: repeat(2, minmax(0, 1fr)); gap: 6px; flex: 1 1 0%;
         min-height: 0; width: 100%; }
@@ -268,7 +267,8 @@ class Controls:
             self.compare_toggle, self.pin_toggle, self.png_button, self.progress,
             self.diagram_status,
             sizing_mode="stretch_width", align_items="center", flex_wrap="wrap")
-        self.grid = pn.Column(*(self._cell(v) for v in views), stylesheets=[GRID_CSS],
+        self.grid = pn.Column(*(self._cell(v) for v in views),
+                              stylesheets=[GRID_COLUMN_CSS, GRID_CSS],
                               sizing_mode="stretch_both", css_classes=["ie-grid"])
         self.main = main = pn.Column(header, self.message_pane, self.caption, self.badge, self.grid,
                          self.accuracy_modal, stylesheets=[MAIN_CSS], sizing_mode="stretch_both",

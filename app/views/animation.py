@@ -82,9 +82,10 @@ function draw(t) {
                     color: lines.map((l) => l[2]), width: lines.map((l) => l[3] * lw)};
   dcur.data = {t: [t], x: [x]};
   pcur.data = {x: [x], v: [v]};
-  // impacts between the previous frame and this one flash the wall
+  // impacts between the previous frame and this one flash the wall (while playing: a
+  // paused frame is not redrawn when the flash ends)
   const ti = imp.data.t;
-  if (st.tprev != null && t > st.tprev && bsearch(ti, t) > bsearch(ti, st.tprev)) {
+  if (st.playing && st.tprev != null && t > st.tprev && bsearch(ti, t) > bsearch(ti, st.tprev)) {
     st.flash = performance.now() + 140;
   }
   st.tprev = t;
