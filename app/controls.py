@@ -1,5 +1,6 @@
-"""The page around the views: sidebar widgets (one per setting), scene buttons, message,
-badge, caption, diagram progress and status, and the layout that holds them.
+"""The page around the views: sidebar widgets (one per setting), scene picker, message,
+badge, caption, diagram progress and status, presenter / compare / pin / PNG controls,
+and the layout that holds them (a grid that fills a projector's screen).
 
 Widgets are built from ``app.settings.SETTINGS`` (``Setting.widget``: slider, input or
 select; ``Setting.group``: the sidebar card). Nothing here computes anything: the
@@ -7,6 +8,8 @@ session (app.explorer) calls ``show_*`` with results and gets user actions throu
 callbacks it passes in.
 """
 from __future__ import annotations
+
+import html
 
 import panel as pn
 import param
@@ -20,7 +23,7 @@ STATUS_NAME = "bifurcation_status"
 CAPTION = ("Paper defaults: m = 1, c = 0.05, k = 1, g = 0, r = 0.8, ω = 2. "
            "Pick a scene of the paper or move a slider.")
 CHANGED_NOTE = "\n\n*Settings changed since this scene was loaded.*"
-NO_SCENE = "Scene of the paper…"
+PICK = "Scene of the paper…"
 CSS = """
 .ie-badge {font-size: 14px;}
 .ie-badge b {color: #1f5fa8;}
@@ -65,12 +68,18 @@ CELL_CSS = """
 :host { min-width: 0; min-height: 0; height: 100%; position: relative; }
 """
 NOTE_CSS = """
-details { font-size: 12px; color: #555; }
+details { font-size: 13px; color: #555; }
 summary { cursor: pointer; }
-details[open] p { position: absolute; z-index: 10; background: #fffbe8; margin: 2px 0;
-                  padding: 6px 10px; border: 1px solid #e0c96b; border-radius: 4px;
-                  max-width: 30em; font-size: 14px; color: #222; }
+details[open] div { position: absolute; z-index: 20; background: #fffbe8; margin: 2px 0;
+                    padding: 6px 12px; border: 1px solid #e0c96b; border-radius: 4px;
+                    width: min(46em, 80vw); font-size: 15px; color: #222; }
+details div p { margin: 4px 0; }
 """
+#: The diagram's note (its view's file belongs to the diagram's owners).
+EXTRA_NOTES = {"bifurcation": (
+    "Bifurcation diagram", "For each ω on the axis, the impact velocities after the "
+    "transient. One dot per ω: one impact per period; several: period-n or multi-impact "
+    "motion; a smear: chaos. The red line is the current ω.")}
 CAPTION_CSS = """
 :host { max-height: 4.6em; overflow-y: auto; }
 p { margin: 2px 0; }
@@ -108,12 +117,6 @@ canvas.toBlob((blob) => {
 """
 
 
-class EditableSlider(pn.widgets.EditableFloatSlider):
-    """EditableFloatSlider whose slider reports moves after 10 ms instead of 50 ms."""
-
-    _slider_widget = PromptFloatSlider
-
-
 class NamedHTML(pn.pane.HTML):
     """An HTML pane whose Bokeh model carries ``model_name``, so that checks outside the
     app find it with ``document.get_model_by_name``."""
@@ -129,29 +132,63 @@ class NamedHTML(pn.pane.HTML):
 
 
 def make_widget(settings, s):
-    """The widget that edits setting ``s`` of ``settings``."""
+    """(widget, page item) editing setting ``s`` of ``settings``: the widget holds the
+    value as typed (a number box, select), the item is what the page shows.
+
+    Light on purpose (a page has ~20 of them): a slider is a labelled number box over a
+    plain slider, both bound to the same setting (no composite widget, no JS links).
+    Only selects carry a tooltip model; the docs of a card's settings are the hover
+    text of its title (see ``_card``).
+    """
     par = settings.param[s.name]
-    common = dict(label=s.label, sizing_mode="stretch_width", css_classes=[f"ie-w-{s.name}"])
+    css = [f"ie-w-{s.name}"]
     if s.widget == "slider":
-        return EditableSlider.from_param(par, start=s.soft[0], end=s.soft[1], step=s.step,
-                                         format=s.fmt, **common)
+        box = pn.widgets.FloatInput.from_param(par, label=s.label, format=s.fmt,
+                                               description=None, sizing_mode="stretch_width")
+        slider = PromptFloatSlider.from_param(par, label="", start=s.soft[0], end=s.soft[1],
+                                              step=s.step, show_value=False,
+                                              sizing_mode="stretch_width", margin=(0, 10))
+        return box, pn.Column(box, slider, css_classes=css, sizing_mode="stretch_width")
     if s.widget == "toggle":
-        return pn.widgets.Toggle.from_param(par, label=s.label, color="default", width=100,
-                                            margin=(4, 5),
-                                            css_classes=[f"ie-w-{s.name}"])
+        toggle = pn.widgets.Toggle.from_param(par, label=s.label, color="default", width=100,
+                                              margin=(4, 5), css_classes=css)
+        return toggle, toggle
+    common = dict(label=s.label, sizing_mode="stretch_width", css_classes=css)
     if s.widget == "select":
-        return pn.widgets.Select.from_param(par, description=s.doc, **common)
+        select = pn.widgets.Select.from_param(par, description=s.doc, **common)
+        return select, select
     cls = pn.widgets.IntInput if s.kind == "integer" else pn.widgets.FloatInput
     extra = {"format": s.fmt} if s.fmt else {}
-    return cls.from_param(par, description=s.doc, **common, **extra)
+    box = cls.from_param(par, description=None, **common, **extra)
+    return box, box
+
+
+def _card(title: str, objects: list, open_: bool = False):
+    """A sidebar group. Open ones are a titled column whose title's hover text holds
+    the docs of its settings; a collapsed card gets its contents (and their Bokeh
+    models) only when first opened, so a page that never opens it never pays for them."""
+    if open_:
+        docs = html.escape("\n".join(f"{s.label.split()[0]}: {s.doc}" for s in SETTINGS
+                                      if s.group == title), quote=True)
+        head = pn.pane.HTML(f"<b title=\"{docs}\">{title} ⓘ</b>", margin=(5, 10, 0, 10),
+                            css_classes=["ie-group"])
+        return pn.Column(head, *objects, sizing_mode="stretch_width")
+    card = pn.layout.Card(title=title, collapsed=True, sizing_mode="stretch_width")
+
+    def opened(event):
+        if not event.new and not card.objects:
+            card.objects = objects
+    card.param.watch(opened, "collapsed")
+    return card
 
 
 class Controls:
     """Widgets, panes and layout of one session's page."""
 
     def __init__(self, settings, views, *, on_scene, on_accuracy, downloads):
-        self.widgets = {s.name: make_widget(settings, s) for s in SETTINGS}
-        self._docs = {s.name: s.doc for s in SETTINGS}
+        made = {s.name: make_widget(settings, s) for s in SETTINGS}
+        self.widgets = {name: widget for name, (widget, _) in made.items()}
+        self._items = {name: item for name, (_, item) in made.items()}
         self.message = ""
         self.message_pane = pn.pane.Alert("", alert_type="warning", visible=False,
                                           css_classes=["ie-message"],
@@ -161,12 +198,11 @@ class Controls:
         self.caption = pn.pane.Markdown(CAPTION, css_classes=["ie-caption"],
                                         sizing_mode="stretch_width", margin=(0, 5),
                                         stylesheets=[CAPTION_CSS])
-        self._on_scene = on_scene
-        self.scene_select = pn.widgets.Select(
-            options={NO_SCENE: "", **{sc.label: sc.key for sc in SCENES}}, value="",
-            width=190, margin=(4, 5), css_classes=["ie-scene-select"],
+        self.scene_picker = pn.widgets.Select(
+            options={PICK: PICK, **{sc.label: sc.key for sc in SCENES}}, value=PICK,
+            css_classes=["ie-scene"], width=190, margin=(4, 5),
             description="Load the settings of one of the paper's figures")
-        self.scene_select.param.watch(self._scene_picked, "value")
+        self.scene_picker.param.watch(lambda event: self._picked(event.new, on_scene), "value")
         self.progress = pn.indicators.Progress(value=0, max=100, width=120, height=12,
                                                bar_color="primary", margin=(6, 5))
         self.diagram_status = NamedHTML("", model_name=STATUS_NAME,
@@ -177,15 +213,7 @@ class Controls:
             description="Run exact, rk4 and rk45 on the current scene and compare their "
                         "impacts and run times (not recomputed on slider moves).")
         self.accuracy_button.on_click(lambda event: on_accuracy())
-        self.accuracy_pane = pn.pane.HTML("", css_classes=["ie-accuracy-out"],
-                                          stylesheets=[CSS], sizing_mode="stretch_width")
-        close = pn.widgets.Button(label="Close", width=80, css_classes=["ie-accuracy-close"])
-        self.accuracy_modal = pn.Column(
-            pn.Row(pn.pane.Markdown("### Accuracy of the three methods on this scene",
-                                    margin=(0, 5)), close),
-            self.accuracy_pane, visible=False, stylesheets=[MODAL_CSS],
-            css_classes=["ie-accuracy-modal"])
-        close.on_click(lambda event: setattr(self.accuracy_modal, "visible", False))
+        self.accuracy_pane = self.accuracy_modal = None      # built on first use
         self.sidebar_toggle = pn.widgets.Toggle(label="☰ Settings", value=True, width=110,
                                                 margin=(4, 5), css_classes=["ie-sidebar-toggle"])
         self.png_button = pn.widgets.Button(label="Save PNG", width=100, margin=(4, 5),
@@ -199,27 +227,12 @@ class Controls:
         self._compare_panel = None
         self.layout = self._layout(views, downloads)
 
-    def _scene_picked(self, event) -> None:
-        if event.new and not self._quiet:
-            self._on_scene(event.new)
-
-    _quiet = False
-
-    def show_scene_key(self, key: str | None) -> None:
-        """Show ``key`` in the scene menu without loading it again."""
-        self._quiet = True
-        try:
-            self.scene_select.value = key or ""
-        finally:
-            self._quiet = False
+    def _picked(self, key, on_scene) -> None:
+        if key != PICK:
+            on_scene(key)
+            self.scene_picker.value = PICK      # the same scene can be picked again
 
     # -- layout ------------------------------------------------------------------------
-
-    def _with_tip(self, name):
-        """Sliders have no tooltip of their own: an (i) icon with the setting's doc."""
-        return pn.Row(self.widgets[name],
-                      pn.widgets.TooltipIcon(value=self._docs[name], margin=(22, 0, 0, 0)),
-                      sizing_mode="stretch_width")
 
     def _group(self, title: str) -> list:
         """The widgets of one sidebar card: sliders and selects on their own line,
@@ -227,52 +240,56 @@ class Controls:
         out, half = [], []
         for s in (s for s in SETTINGS if s.group == title):
             if s.half:
-                half.append(self.widgets[s.name])
+                half.append(self._items[s.name])
                 if len(half) == 2:
                     out.append(pn.Row(*half))
                     half = []
                 continue
-            out.append(self._with_tip(s.name) if s.widget == "slider" else self.widgets[s.name])
+            out.append(self._items[s.name])
         if half:
             out.append(pn.Row(*half))
         return out
 
     def _cell(self, view):
-        """One view in the grid: its "what am I looking at" note and its figure."""
-        note = pn.pane.HTML(
-            f"<details><summary>What am I looking at?</summary><p>{view.note}</p></details>",
-            stylesheets=[NOTE_CSS], margin=(0, 5), height=18, sizing_mode="stretch_width",
-            css_classes=[f"ie-note-{view.key}"])
-        return pn.Column(note, pn.pane.Bokeh(view.root, sizing_mode="stretch_both"),
-                         sizing_mode="stretch_both", stylesheets=[CELL_CSS],
-                         css_classes=[f"ie-cell-{view.key}"])
+        """One view in the grid."""
+        return pn.pane.Bokeh(view.root, sizing_mode="stretch_both", stylesheets=[CELL_CSS],
+                             css_classes=[f"ie-cell-{view.key}"])
+
+    @staticmethod
+    def _notes(views):
+        """"What am I looking at?": one or two sentences per view, folded (one model)."""
+        items = []
+        for v in views:
+            title, note = ((v.figure.title.text, v.note) if v.note else
+                           EXTRA_NOTES.get(v.key, ("", "")))
+            if note:
+                items.append(f"<p><b>{title}</b>: {note}</p>")
+        return pn.pane.HTML("<details><summary>ⓘ What am I looking at?</summary><div>"
+                            + "".join(items) + "</div></details>", stylesheets=[NOTE_CSS],
+                            margin=(8, 5), css_classes=["ie-notes"])
 
     def _layout(self, views, downloads):
-        card = dict(sizing_mode="stretch_width")
         groups = [g for g in dict.fromkeys(s.group for s in SETTINGS) if g != "header"]
-        cards = [pn.layout.Card(*self._group(g), title=g, **card,
-                                **({"collapsible": False} if i < 2 else {"collapsed": True}))
-                 for i, g in enumerate(groups)]
         self.sidebar = sidebar = pn.Column(
-            *cards,
-            pn.layout.Card(*downloads.widgets, title="Downloads", collapsed=True, **card),
-            pn.layout.Card(self.accuracy_button, title="Accuracy", collapsed=True, **card),
+            *(_card(g, self._group(g), open_=i < 2) for i, g in enumerate(groups)),
+            _card("Downloads", downloads.widgets),
+            _card("Accuracy", [self.accuracy_button]),
             width=SIDEBAR_WIDTH, stylesheets=[SIDEBAR_CSS], css_classes=["ie-sidebar"])
         self.sidebar_toggle.link(sidebar, value="visible")
         header = pn.FlexBox(
             self.sidebar_toggle,
             pn.pane.HTML("<b style='font-size:17px'>Impact Explorer</b>", margin=(8, 5)),
-            self.scene_select,
-            *(self.widgets[s.name] for s in SETTINGS if s.group == "header"),
-            self.compare_toggle, self.pin_toggle, self.png_button, self.progress,
-            self.diagram_status,
+            self.scene_picker,
+            *(self._items[s.name] for s in SETTINGS if s.group == "header"),
+            self.compare_toggle, self.pin_toggle, self.png_button, self._notes(views),
+            self.progress, self.diagram_status,
             sizing_mode="stretch_width", align_items="center", flex_wrap="wrap")
         self.grid = pn.Column(*(self._cell(v) for v in views),
                               stylesheets=[GRID_COLUMN_CSS, GRID_CSS],
                               sizing_mode="stretch_both", css_classes=["ie-grid"])
-        self.main = main = pn.Column(header, self.message_pane, self.caption, self.badge, self.grid,
-                         self.accuracy_modal, stylesheets=[MAIN_CSS], sizing_mode="stretch_both",
-                         css_classes=["ie-main"])
+        self.main = main = pn.Column(
+            header, self.message_pane, self.caption, self.badge, self.grid,
+            stylesheets=[MAIN_CSS], sizing_mode="stretch_both", css_classes=["ie-main"])
         return pn.Row(sidebar, main, sizing_mode="stretch_both", stylesheets=[PAGE_CSS],
                       css_classes=["ie-page"])
 
@@ -339,6 +356,17 @@ class Controls:
     def show_accuracy(self, html: str | None) -> None:
         """The accuracy table, in a full-width panel over the page; None while it is
         computed."""
+        if self.accuracy_modal is None:
+            self.accuracy_pane = pn.pane.HTML("", css_classes=["ie-accuracy-out"],
+                                              stylesheets=[CSS], sizing_mode="stretch_width")
+            close = pn.widgets.Button(label="Close", width=80,
+                                      css_classes=["ie-accuracy-close"])
+            self.accuracy_modal = pn.Column(
+                pn.Row(pn.pane.Markdown("### Accuracy of the three methods on this scene",
+                                        margin=(0, 5)), close),
+                self.accuracy_pane, stylesheets=[MODAL_CSS], css_classes=["ie-accuracy-modal"])
+            close.on_click(lambda event: setattr(self.accuracy_modal, "visible", False))
+            self.main.append(self.accuracy_modal)
         self.accuracy_button.disabled = html is None
         self.accuracy_pane.object = html or "computing exact, rk4 and rk45…"
         self.accuracy_modal.visible = True

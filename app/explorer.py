@@ -27,6 +27,7 @@ from .panel_fixes import release_links
 from .scenes import BY_KEY
 from .settings import QUERY_NAMES, Settings
 from .views import VIEWS
+from .views._figure import share_helpers
 from .views.compare import DIAGRAMS as COMPARE_DIAGRAMS
 from .views.compare import SECTIONS as COMPARE_SECTIONS
 from .views.compare import CompareView
@@ -62,6 +63,7 @@ class Explorer(pn.viewable.Viewer):
             view.connect({v.key: v for v in self.views})
             if view.ready is not None and doc is not None:
                 doc.js_on_event("document_ready", view.ready)
+        share_helpers([v.figure for v in self.views])
         self.downloads = Downloads(self)
         self.controls = c = Controls(self.settings, self.views, on_scene=self.load_scene,
                                      on_accuracy=self._on_accuracy, downloads=self.downloads)
@@ -89,7 +91,6 @@ class Explorer(pn.viewable.Viewer):
         self._apply()
         if self._scene_key is not None:
             self.controls.show_caption(BY_KEY[self._scene_key].caption)
-            self.controls.show_scene_key(self._scene_key)
             self._scene_run = state.validate(
                 {**state.defaults(), **BY_KEY[self._scene_key].settings()})
         if errors:

@@ -37,7 +37,8 @@ const st = mass.__ie || (mass.__ie = {playing: false, raf: null, last: null, tpr
 const I = info.data;
 if (!I.g || I.g.length == 0) return;
 const g = I.g[0], w = I.w[0], xs = I.xs[0], d = I.d[0], omega = I.omega[0], fs = I.fs[0];
-const cyl = I.cyl[0], lw = I.lw[0], hs = I.hs[0];
+const cyl = I.cyl[0], lw = I.lw[0], hs = I.hs[0], ww = I.ww[0];
+const wall_px = 7 * lw;       // the wall: a line about ww wide, its face at x = g
 
 function bsearch(a, t) {          // last index with a[i] <= t (-1: none)
   let lo = 0, hi = a.length - 1, ans = -1;
@@ -61,12 +62,21 @@ function draw(t) {
   let [x, v] = state_at(t);
   x = Math.max(x, g);
   const a = x + w, L = xs - a;
+  // impacts between the previous frame and this one flash the wall (while playing: a
+  // paused frame is not redrawn when the flash ends)
+  const ti = imp.data.t;
+  if (st.playing && st.tprev != null && t > st.tprev && bsearch(ti, t) > bsearch(ti, st.tprev)) {
+    st.flash = performance.now() + 140;
+  }
+  st.tprev = t;
+  const flashing = performance.now() < st.flash;
   mass.data = {x: [x], v: [v], t: [t], left: [x], right: [a], bottom: [-0.32], top: [0.32]};
   const sx = [a, a + 0.1 * L], sy = [0.15, 0.15], N = 10;
   for (let k = 1; k < N; k++) { sx.push(a + 0.1 * L + 0.8 * L * k / N); sy.push(k %% 2 ? 0.24 : 0.06); }
   sx.push(a + 0.9 * L, xs); sy.push(0.15, 0.15);
   const F = Math.cos(omega * t), cx = x + 0.5 * w, tip = cx + F * fs, s = F >= 0 ? -1 : 1;
   const lines = [  // [xs, ys, colour, width]
+    [[g - 0.5 * ww, g - 0.5 * ww], [-0.6, 0.6], flashing ? "%(impact)s" : "%(wall)s", 0], // wall
     [[xs, xs], [-0.6, 0.6], "%(wall)s", 2],                 // support
     [[cyl, xs], [-0.09, -0.09], "%(wall)s", 2],             // damper cylinder
     [[cyl, xs], [-0.25, -0.25], "%(wall)s", 2],
@@ -79,21 +89,10 @@ function draw(t) {
     lines.push([[cx, tip], [0.5, 0.5], "%(impact)s", 3],
                [[tip + s * hs, tip, tip + s * hs], [0.58, 0.5, 0.42], "%(impact)s", 3]);
   lines_src.data = {xs: lines.map((l) => l[0]), ys: lines.map((l) => l[1]),
-                    color: lines.map((l) => l[2]), width: lines.map((l) => l[3] * lw)};
+                    color: lines.map((l) => l[2]),
+                    width: lines.map((l) => l[3] ? l[3] * lw : wall_px)};
   dcur.data = {t: [t], x: [x]};
   pcur.data = {x: [x], v: [v]};
-  // impacts between the previous frame and this one flash the wall (while playing: a
-  // paused frame is not redrawn when the flash ends)
-  const ti = imp.data.t;
-  if (st.playing && st.tprev != null && t > st.tprev && bsearch(ti, t) > bsearch(ti, st.tprev)) {
-    st.flash = performance.now() + 140;
-  }
-  st.tprev = t;
-  const flashing = performance.now() < st.flash;
-  if (flashing !== st.flashing) {
-    wall.fill_color = flashing ? "%(impact)s" : "%(wall)s";
-    st.flashing = flashing;
-  }
   const k = bsearch(stick.data.start, t);
   const stuck = k >= 0 && t <= stick.data.end[k];
   if (stuck !== st.stuck) { mass_glyph.fill_color = stuck ? "%(stick)s" : "%(line)s"; st.stuck = stuck; }
@@ -156,7 +155,7 @@ else if (action === "play") {
 
 #: Scene constants the browser draws with: wall at g, mass width, support, damper rod and
 #: cylinder, ω, force arrow scale and head, line width factor (presenter mode).
-INFO = ("g", "w", "xs", "d", "cyl", "omega", "fs", "hs", "lw")
+INFO = ("g", "w", "xs", "d", "cyl", "omega", "fs", "hs", "lw", "ww")
 
 
 def _local(**data) -> ColumnDataSource:
@@ -173,21 +172,15 @@ class AnimationView(View):
 
     def __init__(self):
         self.info = ColumnDataSource({c: [] for c in INFO})
-        self.wall_src = ColumnDataSource({"left": [], "right": [], "bottom": [], "top": []})
         self.mass = _local(x=[], v=[], t=[], left=[], right=[], bottom=[], top=[])
         self.lines = _local(xs=[], ys=[], color=[], width=[])
         self._presenter = False
         self.figure = fig = make_figure("animation_figure", "The motion", "displacement x",
                                         "", x_range=Range1d(-1.0, 1.0, syncable=False),
+                                        y_axis_type=None,
                                         y_range=Range1d(-1.0, 0.75, syncable=False),
                                         tools="")
         fig.toolbar_location = None
-        fig.yaxis.visible = False
-        fig.ygrid.visible = False
-        wall = fig.quad(left="left", right="right", bottom="bottom", top="top",
-                        source=self.wall_src, fill_color=WALL, line_color=WALL,
-                        hatch_pattern="/", hatch_color="white", name="animation_wall")
-        wall.glyph.syncable = False
         fig.multi_line("xs", "ys", source=self.lines, line_color="color", line_width="width",
                        name="animation_lines")
         body = fig.quad(left="left", right="right", bottom="bottom", top="top",
@@ -213,7 +206,6 @@ class AnimationView(View):
                                      sizing_mode="stretch_width"),
                             sizing_mode="stretch_both", name="animation_layout")
         self._body_glyph = body.glyph
-        self._wall_glyph = wall.glyph
 
     @property
     def root(self):
@@ -225,7 +217,7 @@ class AnimationView(View):
         callback = CustomJS(code=ANIMATE, args=dict(
             src=disp.source, imp=disp.impacts, stick=disp.sticking, info=self.info,
             mass=self.mass, mass_glyph=self._body_glyph, lines_src=self.lines,
-            wall=self._wall_glyph, label=self.label, dcur=disp.cursor, pcur=phase.cursor,
+            label=self.label, dcur=disp.cursor, pcur=phase.cursor,
             slider=self.slider, play=self.play, step=self.step, speed=self.speed))
         self.play.js_on_event("button_click", callback)
         self.step.js_on_event("button_click", callback)
@@ -253,11 +245,11 @@ class AnimationView(View):
         cyl = hi + w + 0.03 * span               # open end of the damper's cylinder
         xs = hi + w + d + 0.12 * span            # support of the spring and the damper
         wall_w = 0.05 * span
+        ww = 0.014 * (xs + 0.04 * span - lo + 1.5 * wall_w)   # ~7 px of a 500 px plot
         self.figure.x_range.update(start=lo - 1.5 * wall_w, end=xs + 0.04 * span)
-        self.wall_src.data = {"left": [g - wall_w], "right": [g], "bottom": [-0.6],
-                              "top": [0.6]}
         self.info.data = {"g": [g], "w": [w], "xs": [xs], "d": [d], "cyl": [cyl],
                           "omega": [run.params.omega], "fs": [0.6 * span],
-                          "hs": [0.06 * span], "lw": [2.0 if self._presenter else 1.0]}
+                          "hs": [0.06 * span], "lw": [2.0 if self._presenter else 1.0],
+                          "ww": [ww]}
         self.figure.title.text = f"The motion, ω = {run.params.omega:g}"
 

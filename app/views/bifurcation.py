@@ -7,7 +7,7 @@ from bokeh.models import ColumnDataSource, Range1d, Span
 
 from ..compute import last
 from ..state import Run
-from ._figure import IMPACT, WALL, make_figure
+from ._figure import IMPACT, POINTS_TOOLS, WALL, make_figure
 from .base import View
 
 COLUMNS = ("omega", "v", "t", "phase")
@@ -30,7 +30,8 @@ class BifurcationView(View):
         self.title = "Bifurcation diagram"
         self.figure = make_figure("bifurcation_figure", "Bifurcation diagram",
                                   "driving frequency ω (rad/s)", "impact velocity ẋ(τ_I−)",
-                                  x_range=Range1d(0.1, 5.0), height=340)
+                                  x_range=Range1d(0.1, 5.0), height=340,
+                                  tools=POINTS_TOOLS + ",save")
         self.figure.scatter("omega", "v", source=self.source, size=2, color=WALL,
                             alpha=0.55, name="bifurcation")
         self.marker = Span(location=2.0, dimension="height", line_color=IMPACT,

@@ -11,7 +11,8 @@ from bokeh.events import RangesUpdate
 from bokeh.models import ColumnDataSource, HoverTool, Range1d, Span
 
 from ..compute import SceneData
-from ._figure import IMPACT, LINE, STICK, WALL, auto_range_over, make_figure
+from ._figure import (IMPACT, LINE, STICK, TIME_SERIES_TOOLS, WALL, auto_range_over,
+                      make_figure)
 from .base import View
 
 #: The x axis opens on the last few periods; reset/zoom out shows the whole window.
@@ -34,7 +35,7 @@ class DisplacementView(View):
         self.cursor = ColumnDataSource({"t": [0.0], "x": [0.0]}, syncable=False)
         self.figure = fig = make_figure("displacement_figure", "Displacement x(τ)",
                                         "time τ (s)", "displacement x",
-                                        x_range=Range1d(0.0, 1.0))
+                                        x_range=Range1d(0.0, 1.0), tools=TIME_SERIES_TOOLS)
         fig.vstrip(x0="start", x1="end", source=self.sticking, fill_color=STICK,
                    fill_alpha=0.35, line_alpha=0, name="displacement_sticking",
                    level="underlay")

@@ -8,7 +8,7 @@ from bokeh.events import Tap
 from bokeh.models import ColumnDataSource, HoverTool, Span
 
 from ..compute import SceneData
-from ._figure import LINE, WALL, auto_range_over, make_figure
+from ._figure import CURVE_TOOLS, LINE, WALL, auto_range_over, make_figure
 from .base import View
 
 
@@ -34,7 +34,8 @@ class PhaseView(View):
         self.source = ColumnDataSource({"x": [], "v": []})
         self.cursor = ColumnDataSource({"x": [0.0], "v": [0.0]}, syncable=False)
         self.figure = fig = make_figure("phase_figure", "Phase trajectory (x, ẋ)",
-                                        "displacement x", "velocity ẋ")
+                                        "displacement x", "velocity ẋ",
+                                        tools=CURVE_TOOLS)
         self.wall = Span(location=0.0, dimension="height", line_color=WALL,
                          line_dash="dashed", line_width=1.5, name="phase_wall")
         fig.add_layout(self.wall)

@@ -257,6 +257,7 @@ def test_tap_on_the_phase_plane_sets_the_initial_state(page, server):
     tol_v = 2 * (v_hi - v_lo) / fig_px["height"]
     q = query(page)
     assert abs(float(q["x0"]) - 1.0) < tol_x and abs(float(q["v0"]) - 0.5) < tol_v, q
+    page.get_by_text("Time window, start, method").click()    # built when first opened
     assert abs(float(x_box.input_value()) - 1.0) < tol_x
     assert abs(float(v_box.input_value()) - 0.5) < tol_v
     # below the wall (x < g = 0): the motion starts on the wall

@@ -13,7 +13,7 @@ import math
 import pytest
 
 from rel_cases import SMALL, names_field, outcome, url_cases, widget_cases
-from rel_server import message_text, open_session, pump, slider, source, value_input
+from rel_server import by_class, message_text, open_session, pump, slider, source, value_input
 
 VIEWS = {"displacement": "x", "phase": "x", "impact_map": "v", "poincare": "x",
          "bifurcation": "omega"}
@@ -62,6 +62,22 @@ def _wait_for_views(session, timeout=30):
                                      for v, c in VIEWS.items()), timeout)
 
 
+def _open_cards(session):
+    """Open the sidebar's collapsed cards, as a user does: their widgets are built and
+    sent to the page only then."""
+    doc = session.document
+    for model in list(doc.models):
+        if type(model).__name__ == "Card" and model.collapsed:
+            model.collapsed = False
+
+    def built():
+        try:
+            return all(by_class(doc, f"ie-w-{n}") for n in ("t_end", "t_record", "bif_n"))
+        except KeyError:
+            return False
+    assert pump(session, built, 20), "the cards' widgets did not arrive"
+
+
 WIRE_URLS = [
     ({"k": "abc"}, "k"), ({"omega": "nan"}, "omega"), ({"r": "1.5"}, "r"),
     ({"psi": "99"}, "psi"), ({"t_end": "1e12"}, "t_end"),
@@ -93,6 +109,7 @@ def test_bad_widget_values_over_the_wire(served):
     try:
         doc = session.document
         assert _wait_for_views(session)
+        _open_cards(session)
         x = source(doc, "displacement").data["x"]
         bad = [(value_input, "m", math.nan, 1.0), (value_input, "m", None, 1.0),
                (value_input, "k", -1.0, 1.0), (value_input, "t_end", 1e12, 500.0),
@@ -121,6 +138,7 @@ def test_tampered_widget_values_are_rejected_and_the_session_goes_on(served):
     try:
         doc = session.document
         assert _wait_for_views(session)
+        _open_cards(session)
         conn = session._connection
         for name, value in (("method", "euler"), ("m", "__import__('os')"),
                             ("omega", "../../etc/passwd")):
