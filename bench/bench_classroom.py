@@ -88,7 +88,9 @@ def students(url: str, n: int, stop: threading.Event) -> list[threading.Thread]:
     def run(i):
         session = pull_session(url=url)
         doc = session.document
-        sliders = [m for m in doc.models if type(m).__name__ == "FloatSlider"]
+        sliders = [m for m in doc.models if type(m).__name__ == "Slider"
+                   and m.name != "animation_time" and m.start < 2 < m.end]     # ω
+        assert sliders, "no ω slider in the page"
         k = 0
         while not stop.is_set():
             k += 1
