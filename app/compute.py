@@ -18,6 +18,8 @@ from .state import Run
 SCENE_POINTS = 4000
 #: At most this many impact corners are inserted into the time series.
 MAX_CORNERS = 2000
+#: At most this many sticking intervals are shaded (the last ones).
+MAX_STICKING = 2000
 #: At most this many points in the impact map and the Poincare map.
 MAX_MAP_POINTS = 20_000
 #: Ceilings of one scene simulation (a scene is two): reaching one stops the run with
@@ -66,6 +68,7 @@ class SceneData:
     run: Run
     trajectory: dict   # t, x, v (dense samples with exact impact corners)
     impacts: dict      # t, phase, v (before impact), v_after
+    sticking: dict     # start, end of the intervals the mass rests on the wall
     label: str
     elapsed: float
     status: int
@@ -94,6 +97,46 @@ def trajectory_columns(sol: il.Solution, r: float, g: float) -> dict:
     return {"t": t, "x": x, "v": v}
 
 
+#: The time plot's samples for the window on screen: at least this many per forcing
+#: period (a smooth curve, and a faithful animation), at least two per pixel column...
+SAMPLES_PER_PERIOD = 48
+#: ...and at most this many; a wider window is drawn as its envelope (the lowest and
+#: highest x of each pixel column, from up to ENVELOPE_SAMPLES samples, under the
+#: scene limit SCENE_MAX_SAMPLES).
+MAX_WINDOW_SAMPLES = 24_000
+ENVELOPE_SAMPLES = 240_000
+
+
+def window_columns(run: Run, start: float, end: float, pixels: int) -> dict:
+    """x(t), v(t) on screen for the window [start, end] (clipped to the recorded one):
+    samples dense enough for the window and the screen, with the exact impact corners;
+    or, when that would exceed MAX_WINDOW_SAMPLES, the envelope per pixel column
+    (``v`` NaN: not a motion to animate). The run is the scene's own (same start, same
+    steps: its impacts are bit for bit those of the scene), simulated up to ``end``.
+    """
+    p = run.params
+    a, b = max(float(start), run.t_record), min(float(end), run.t_end)
+    pixels = int(min(max(pixels or 1000, 200), 4000))
+    if not b > a:
+        return {"t": np.zeros(0), "x": np.zeros(0), "v": np.zeros(0)}
+    n = int(max(SAMPLES_PER_PERIOD * (b - a) / p.T, 2 * pixels))
+    options = {**dict(run.scene_key()[1:]), "t_end": b, "t_record": a}
+    envelope = n > MAX_WINDOW_SAMPLES
+    sol = il.simulate(p, dense=min(n, ENVELOPE_SAMPLES),
+                      limits=scene_limits(options["method"]), **options)
+    cols = trajectory_columns(sol, p.r, p.g)
+    if not envelope:
+        return cols
+    t, x = cols["t"], cols["x"]
+    edges = np.linspace(a, b, pixels + 1)
+    col = np.clip(np.searchsorted(edges, t, side="right") - 1, 0, pixels - 1)
+    starts = np.flatnonzero(np.r_[True, col[1:] != col[:-1]])
+    lo, hi = np.minimum.reduceat(x, starts), np.maximum.reduceat(x, starts)
+    tc = 0.5 * (edges[col[starts]] + edges[col[starts] + 1])
+    return {"t": np.repeat(tc, 2), "x": np.column_stack((lo, hi)).ravel(),
+            "v": np.full(2 * tc.size, np.nan)}
+
+
 def last(a, n: int) -> np.ndarray:
     a = np.asarray(a, dtype=float)
     return a[-n:] if a.size > n else a
@@ -108,7 +151,9 @@ def build_scene(run: Run) -> SceneData:
     v = last(imp.v, MAX_MAP_POINTS)
     impacts = {"t": last(imp.t, MAX_MAP_POINTS), "phase": last(imp.phase, MAX_MAP_POINTS),
                "v": v, "v_after": -p.r * v}
+    stick = np.asarray(sol.sticking, dtype=float).reshape(-1, 2)[-MAX_STICKING:]
     return SceneData(run=run, trajectory=trajectory_columns(sol, p.r, p.g), impacts=impacts,
+                 sticking={"start": stick[:, 0].copy(), "end": stick[:, 1].copy()},
                  label=il.classify(sol).label, elapsed=float(sol.elapsed),
                  status=int(sol.status), message=str(sol.message))
 

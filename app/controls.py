@@ -1,5 +1,6 @@
-"""The page around the views: sidebar widgets (one per setting), scene buttons, message,
-badge, caption, diagram progress and status, and the layout that holds them.
+"""The page around the views: sidebar widgets (one per setting), scene picker, message,
+badge, caption, diagram progress and status, presenter / compare / pin / PNG controls,
+and the layout that holds them (a grid that fills a projector's screen).
 
 Widgets are built from ``app.settings.SETTINGS`` (``Setting.widget``: slider, input or
 select; ``Setting.group``: the sidebar card). Nothing here computes anything: the
@@ -13,22 +14,109 @@ import html
 import panel as pn
 import param
 
-from .panel_fixes import PromptFloatSlider
+from .panel_fixes import GRID_COLUMN_CSS, PromptFloatSlider
 from .scenes import SCENES
 from .settings import ON_DIAGRAM, RESEARCH, SETTINGS
 
-SIDEBAR_WIDTH = 310
+SIDEBAR_WIDTH = 300
 STATUS_NAME = "bifurcation_status"
 STABILITY_NAME = "stability_readout"
+UNDER_HEIGHT = 140     # px of a strip drawn under a view in its cell (the Lyapunov strip)
 CAPTION = ("Paper defaults: m = 1, c = 0.05, k = 1, g = 0, r = 0.8, ω = 2. "
            "Pick a scene of the paper or move a slider.")
-PICK = "Pick a scene of the paper…"
 CHANGED_NOTE = "\n\n*Settings changed since this scene was loaded.*"
+PICK = "Scene of the paper…"
 CSS = """
-.ie-badge {font-size: 16px;}
+.ie-badge {font-size: 14px;}
 .ie-badge b {color: #1f5fa8;}
 .ie-stability {font-size: 14px;}
-.ie-accuracy td, .ie-accuracy th {padding: 2px 6px; font-size: 12px; text-align: left;}
+.ie-accuracy {border-collapse: collapse; width: 100%;}
+.ie-accuracy td, .ie-accuracy th {padding: 4px 10px; font-size: 15px; text-align: left;
+                                  border-bottom: 1px solid #ddd; white-space: nowrap;}
+"""
+#: The page fills the window on a landscape screen of at least 1000 x 560 CSS px (a
+#: projector at 1280 x 720 or 1920 x 1080): six cells, 3 x 2, no scrolling. Below that
+#: (tablets, zoomed laptops) the views take two columns (one below 640 px) of fixed
+#: height, the sidebar follows them, and the page scrolls down only.
+PAGE_CSS = """
+:host { width: 100%; }
+@media (max-width: 999px), (max-height: 559px) {
+  :host { flex-direction: column !important; height: auto !important; }
+}
+"""
+SIDEBAR_CSS = """
+:host { height: 100vh; overflow-y: auto; overflow-x: hidden; flex-shrink: 0; }
+@media (max-width: 999px), (max-height: 559px) {
+  :host { height: auto; width: 100% !important; overflow-y: visible; flex: none !important;
+          order: 2; }
+}
+"""
+MAIN_CSS = """
+:host { height: 100vh; min-width: 0; flex: 1 1 0%; }
+@media (max-width: 999px), (max-height: 559px) {
+  :host { height: auto !important; flex: none !important; }
+}
+"""
+GRID_CSS = """
+:host { display: grid !important; grid-template-columns: repeat(3, minmax(0, 1fr));
+        grid-template-rows: repeat(2, minmax(0, 1fr)); gap: 6px; flex: 1 1 0%;
+        min-height: 0; width: 100%; }
+@media (max-width: 999px), (max-height: 559px) {
+  :host { grid-template-columns: repeat(2, minmax(0, 1fr)); grid-auto-rows: 340px;
+          grid-template-rows: none; flex: none !important; height: auto !important; }
+}
+@media (max-width: 639px) { :host { grid-template-columns: minmax(0, 1fr); } }
+"""
+CELL_CSS = """
+:host { min-width: 0; min-height: 0; height: 100%; position: relative; }
+"""
+NOTE_CSS = """
+details { font-size: 13px; color: #555; }
+summary { cursor: pointer; }
+details[open] div { position: absolute; z-index: 20; background: #fffbe8; margin: 2px 0;
+                    padding: 6px 12px; border: 1px solid #e0c96b; border-radius: 4px;
+                    width: min(46em, 80vw); font-size: 15px; color: #222; }
+details div p { margin: 4px 0; }
+"""
+#: The diagram's note (its view's file belongs to the diagram's owners).
+EXTRA_NOTES = {"bifurcation": (
+    "Bifurcation diagram", "For each ω on the axis, the impact velocities after the "
+    "transient. One dot per ω: one impact per period; several: period-n or multi-impact "
+    "motion; a smear: chaos. The red line is the current ω.")}
+CAPTION_CSS = """
+:host { max-height: 4.6em; overflow-y: auto; }
+p { margin: 2px 0; }
+"""
+MODAL_CSS = """
+:host { position: fixed !important; top: 6vh; left: 5vw; width: 90vw !important;
+        max-height: 88vh; overflow: auto; z-index: 1000; background: white;
+        border: 1px solid #999; border-radius: 6px; box-shadow: 0 8px 30px #0005;
+        padding: 10px; }
+"""
+#: Saves every figure on the page as one PNG, drawn where it is on the page (BokehJS
+#: exports each plot's canvas; no server round trip).
+PNG_JS = """
+const views = [...Bokeh.index.query((v) => v.model.constructor.__name__ === "Figure")];
+const boxes = views.map((v) => [v, v.el.getBoundingClientRect()]).filter(([v, b]) => b.width > 0 && b.height > 0);
+if (boxes.length === 0) return;
+const x0 = Math.min(...boxes.map(([v, b]) => b.left)), y0 = Math.min(...boxes.map(([v, b]) => b.top));
+const x1 = Math.max(...boxes.map(([v, b]) => b.right)), y1 = Math.max(...boxes.map(([v, b]) => b.bottom));
+const r = window.devicePixelRatio || 1;
+const canvas = document.createElement("canvas");
+canvas.width = Math.round((x1 - x0 + 16) * r); canvas.height = Math.round((y1 - y0 + 16) * r);
+const ctx = canvas.getContext("2d");
+ctx.fillStyle = "white"; ctx.fillRect(0, 0, canvas.width, canvas.height);
+for (const [v, b] of boxes) {
+  const layer = v.export("png", true);
+  ctx.drawImage(layer.canvas, (b.left - x0 + 8) * r, (b.top - y0 + 8) * r, b.width * r, b.height * r);
+}
+canvas.toBlob((blob) => {
+  const a = document.createElement("a");
+  a.href = URL.createObjectURL(blob);
+  a.download = "impact_explorer.png";
+  document.body.appendChild(a); a.click(); a.remove();
+  setTimeout(() => URL.revokeObjectURL(a.href), 10000);
+}, "image/png");
 """
 
 
@@ -64,6 +152,10 @@ def make_widget(settings, s):
                                               step=s.step, show_value=False,
                                               sizing_mode="stretch_width", margin=(0, 10))
         return box, pn.Column(box, slider, css_classes=css, sizing_mode="stretch_width")
+    if s.widget == "toggle":
+        toggle = pn.widgets.Toggle.from_param(par, label=s.label, color="default", width=100,
+                                              margin=(4, 5), css_classes=css)
+        return toggle, toggle
     common = dict(label=s.label, sizing_mode="stretch_width", css_classes=css)
     if s.widget == "checkbox":
         box = pn.widgets.Checkbox.from_param(par, name=s.label, css_classes=css,
@@ -107,30 +199,42 @@ class Controls:
         self.message = ""
         self.message_pane = pn.pane.Alert("", alert_type="warning", visible=False,
                                           css_classes=["ie-message"],
-                                          sizing_mode="stretch_width")
-        self.badge = pn.pane.HTML("", css_classes=["ie-badge"], sizing_mode="stretch_width",
-                                  stylesheets=[CSS])
+                                          sizing_mode="stretch_width", margin=(0, 5))
+        self.badge = pn.pane.HTML("", css_classes=["ie-badge"], stylesheets=[CSS],
+                                  margin=(0, 5))
         self.stability = NamedHTML("", model_name=STABILITY_NAME,
                                    css_classes=["ie-stability"], stylesheets=[CSS],
-                                   sizing_mode="stretch_width")
+                                   margin=(0, 5), sizing_mode="stretch_width")
         self.caption = pn.pane.Markdown(CAPTION, css_classes=["ie-caption"],
-                                        sizing_mode="stretch_width")
+                                        sizing_mode="stretch_width", margin=(0, 5),
+                                        stylesheets=[CAPTION_CSS])
         self.scene_picker = pn.widgets.Select(
-            label="Scenes of the paper", options={PICK: PICK, **{sc.label: sc.key for sc in SCENES}},
-            value=PICK, css_classes=["ie-scene"], width=260, margin=(5, 10))
+            options={PICK: PICK, **{sc.label: sc.key for sc in SCENES}}, value=PICK,
+            css_classes=["ie-scene"], width=190, margin=(4, 5),
+            description="Load the settings of one of the paper's figures")
         self.scene_picker.param.watch(lambda event: self._picked(event.new, on_scene), "value")
-        self.progress = pn.indicators.Progress(value=0, max=100, width=200, height=14,
-                                               bar_color="primary", margin=(8, 10))
+        self.progress = pn.indicators.Progress(value=0, max=100, width=120, height=12,
+                                               bar_color="primary", margin=(6, 5))
         self.diagram_status = NamedHTML("", model_name=STATUS_NAME,
                                         css_classes=["ie-diagram-status"],
-                                        sizing_mode="stretch_width")
+                                        sizing_mode="stretch_width", margin=(0, 5))
         self.accuracy_button = pn.widgets.Button(
             label="Compare methods", color="primary", sizing_mode="stretch_width",
             description="Run exact, rk4 and rk45 on the current scene and compare their "
                         "impacts and run times (not recomputed on slider moves).")
         self.accuracy_button.on_click(lambda event: on_accuracy())
-        self.accuracy_pane = pn.pane.HTML("", css_classes=["ie-accuracy-out"],
-                                          stylesheets=[CSS], sizing_mode="stretch_width")
+        self.accuracy_pane = self.accuracy_modal = None      # built on first use
+        self.sidebar_toggle = pn.widgets.Toggle(label="☰ Settings", value=True, width=110,
+                                                margin=(4, 5), css_classes=["ie-sidebar-toggle"])
+        self.png_button = pn.widgets.Button(label="Save PNG", width=100, margin=(4, 5),
+                                            css_classes=["ie-png"],
+                                            description="All views as one PNG image")
+        self.png_button.js_on_click(code=PNG_JS)
+        self.compare_toggle = pn.widgets.Toggle(label="Compare", width=100, margin=(4, 5),
+                                                css_classes=["ie-compare"])
+        self.pin_toggle = pn.widgets.Toggle(label="Pin maps", width=100, margin=(4, 5),
+                                            css_classes=["ie-pin"])
+        self._compare_panel = None
         self.layout = self._layout(views, downloads)
 
     def _picked(self, key, on_scene) -> None:
@@ -156,34 +260,75 @@ class Controls:
             out.append(pn.Row(*half))
         return out
 
+    def _cell(self, view, under=()):
+        """One view in the grid, with the views drawn under it (sharing its width)."""
+        if not under:
+            return pn.pane.Bokeh(view.root, sizing_mode="stretch_both", stylesheets=[CELL_CSS],
+                                 css_classes=[f"ie-cell-{view.key}"])
+        return pn.Column(pn.pane.Bokeh(view.root, sizing_mode="stretch_both"),
+                         *(pn.pane.Bokeh(u.root, sizing_mode="stretch_width",
+                                         height=UNDER_HEIGHT) for u in under),
+                         sizing_mode="stretch_both", stylesheets=[CELL_CSS],
+                         css_classes=[f"ie-cell-{view.key}"])
+
+    @staticmethod
+    def _notes(views):
+        """"What am I looking at?": one or two sentences per view, folded (one model)."""
+        items = []
+        for v in views:
+            title, note = ((v.figure.title.text, v.note) if v.note else
+                           EXTRA_NOTES.get(v.key, ("", "")))
+            if note:
+                items.append(f"<p><b>{title}</b>: {note}</p>")
+        return pn.pane.HTML("<details><summary>ⓘ What am I looking at?</summary><div>"
+                            + "".join(items) + "</div></details>", stylesheets=[NOTE_CSS],
+                            margin=(8, 5), css_classes=["ie-notes"])
+
     def _layout(self, views, downloads):
         groups = [g for g in dict.fromkeys(s.group for s in SETTINGS)
-                  if g not in (RESEARCH, ON_DIAGRAM)]
-        sidebar = pn.Column(
+                  if g not in ("header", RESEARCH, ON_DIAGRAM)]
+        self.sidebar = sidebar = pn.Column(
             *(_card(g, self._group(g), open_=i < 2) for i, g in enumerate(groups)),
             _card("Downloads", downloads.widgets),
-            _card("Accuracy", [self.accuracy_button, self.accuracy_pane]),
-            width=SIDEBAR_WIDTH)
-        pane = dict(sizing_mode="stretch_width")
-        grid = pn.GridBox(*(pn.pane.Bokeh(v.figure, **pane) for v in views
-                            if not v.wide and v.figure is not None),
-                          ncols=2, sizing_mode="stretch_width")
-        main = self.main = pn.Column(
-            pn.pane.Markdown("## Impact Explorer — forced oscillator with a rigid endstop",
-                             margin=(0, 10)),
-            self.message_pane,
+            _card("Accuracy", [self.accuracy_button]),
+            width=SIDEBAR_WIDTH, stylesheets=[SIDEBAR_CSS], css_classes=["ie-sidebar"])
+        self.sidebar_toggle.link(sidebar, value="visible")
+        header = pn.FlexBox(
+            self.sidebar_toggle,
+            pn.pane.HTML("<b style='font-size:17px'>Impact Explorer</b>", margin=(8, 5)),
             self.scene_picker,
-            self.caption,
-            self.badge,
-            self.stability,
-            grid,
-            self.progress,
-            self.diagram_status,
-            *(self._items[s.name] for s in SETTINGS if s.group == ON_DIAGRAM),
-            *(pn.pane.Bokeh(v.figure, **pane) for v in views
-              if v.wide and v.figure is not None),
-            sizing_mode="stretch_width")
-        return pn.Row(sidebar, main, sizing_mode="stretch_width")
+            *(self._items[s.name] for s in SETTINGS if s.group in ("header", ON_DIAGRAM)),
+            self.compare_toggle, self.pin_toggle, self.png_button, self._notes(views),
+            self.progress, self.diagram_status,
+            sizing_mode="stretch_width", align_items="center", flex_wrap="wrap")
+        # a wide view (the Lyapunov strip) goes under the diagram, in the diagram's cell
+        under = [v for v in views if v.wide and v.figure is not None]
+        self.grid = pn.Column(*(self._cell(v, under if v.key == "bifurcation" else ())
+                                for v in views if not v.wide and v.figure is not None),
+                              stylesheets=[GRID_COLUMN_CSS, GRID_CSS],
+                              sizing_mode="stretch_both", css_classes=["ie-grid"])
+        self.main = main = pn.Column(
+            header, self.message_pane, self.caption, self.badge, self.stability, self.grid,
+            stylesheets=[MAIN_CSS], sizing_mode="stretch_both", css_classes=["ie-main"])
+        return pn.Row(sidebar, main, sizing_mode="stretch_both", stylesheets=[PAGE_CSS],
+                      css_classes=["ie-page"])
+
+    def show_compare(self, root, visible: bool) -> None:
+        """The compare panel (built on first use) over the page, or hide it."""
+        if self._compare_panel is None:
+            if not visible:
+                return
+            close = pn.widgets.Button(label="Close", width=80, css_classes=["ie-compare-close"])
+            close.on_click(lambda event: setattr(self.compare_toggle, "value", False))
+            self._compare_panel = pn.Column(
+                pn.Row(pn.pane.Markdown(
+                    "### Side by side: Fig. 3 (a)–(f), diagrams for r = 0 … 0.9; Fig. 7 "
+                    "(a)–(d), Poincaré sections at ω = 2.8 — shared, fixed axes",
+                    margin=(0, 5)), close),
+                pn.pane.Bokeh(root, sizing_mode="stretch_width"),
+                stylesheets=[MODAL_CSS], css_classes=["ie-compare-panel"])
+            self.main.append(self._compare_panel)
+        self._compare_panel.visible = visible
 
     def add_research(self, card) -> None:
         """The research card, last on the page (below the six main figures)."""
@@ -237,6 +382,19 @@ class Controls:
             self.progress.value = 0
 
     def show_accuracy(self, html: str | None) -> None:
-        """The accuracy table; None while it is computed."""
+        """The accuracy table, in a full-width panel over the page; None while it is
+        computed."""
+        if self.accuracy_modal is None:
+            self.accuracy_pane = pn.pane.HTML("", css_classes=["ie-accuracy-out"],
+                                              stylesheets=[CSS], sizing_mode="stretch_width")
+            close = pn.widgets.Button(label="Close", width=80,
+                                      css_classes=["ie-accuracy-close"])
+            self.accuracy_modal = pn.Column(
+                pn.Row(pn.pane.Markdown("### Accuracy of the three methods on this scene",
+                                        margin=(0, 5)), close),
+                self.accuracy_pane, stylesheets=[MODAL_CSS], css_classes=["ie-accuracy-modal"])
+            close.on_click(lambda event: setattr(self.accuracy_modal, "visible", False))
+            self.main.append(self.accuracy_modal)
         self.accuracy_button.disabled = html is None
         self.accuracy_pane.object = html or "computing exact, rk4 and rk45…"
+        self.accuracy_modal.visible = True

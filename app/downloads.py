@@ -96,12 +96,12 @@ class Downloads:
         self._name(0, "impacts")
         imp = self.session.scene.impacts
         return to_csv({"t": imp["t"], "phase": imp["phase"], "v_before": imp["v"],
-                       "v_after": imp["v_after"]})
+                       "v_after": imp["v_after"]}, self.session.run)
 
     def poincare_csv(self) -> io.StringIO:
         self._name(1, "poincare")
         s = self.session.section
-        return to_csv({"t": s["t"], "x": s["x"], "v": s["v"]})
+        return to_csv({"t": s["t"], "x": s["x"], "v": s["v"]}, self.session.run)
 
     def bifurcation_csv(self) -> io.StringIO:
         self._name(2, "bifurcation")

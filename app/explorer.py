@@ -17,6 +17,7 @@ raises into Panel (no traceback in the server log).
 from __future__ import annotations
 
 import logging
+from urllib.parse import urlencode
 from concurrent.futures import ThreadPoolExecutor
 
 import panel as pn
@@ -31,6 +32,9 @@ from .scenes import BY_KEY
 from .settings import QUERY_NAMES, SYMBOLS, Settings
 from .views import VIEWS
 from .views._figure import share_helpers
+from .views.compare import DIAGRAMS as COMPARE_DIAGRAMS
+from .views.compare import SECTIONS as COMPARE_SECTIONS
+from .views.compare import CompareView
 
 log = logging.getLogger(__name__)
 
@@ -51,6 +55,7 @@ class Explorer(pn.viewable.Viewer):
         values, errors = state.initial_settings(args or {})
         self.settings = Settings(**values)
         self.run = self.scene = self.section = None
+        self._scene_key = state.scene_of(args or {})   # the paper's scene loaded last
         self._scene_run = None            # run as loaded by the last scene button
         self._wanted = None               # the latest valid settings (may be computing)
         self._keep_message = True         # the link's message stays until a user change
@@ -61,9 +66,13 @@ class Explorer(pn.viewable.Viewer):
         self.views = [cls() for cls in VIEWS]
         for view in self.views:
             setattr(self, view.key, view)
+            view.request = self.request
+            view.request_window = self._request_window
             view.connect(self.pick)
         for view in self.views:
             view.link({v.key: v for v in self.views})
+            if view.ready is not None and doc is not None:
+                doc.js_on_event("document_ready", view.ready)
         share_helpers([v.figure for v in self.views if v.figure is not None])
         self.downloads = Downloads(self)
         self.controls = c = Controls(self.settings, self.views, on_scene=self.load_scene,
@@ -73,6 +82,8 @@ class Explorer(pn.viewable.Viewer):
         pool = None if doc is None else _SCENE_POOL
         self.scene_job = Job("scene", lambda run, t: compute.scene_and_section(run, self._shown), dispatch,
                              pool=pool, on_result=self._scene_done, show_stale=True)
+        self.window_job = Job("window", lambda req, t: compute.window_columns(*req), dispatch,
+                              pool=pool, on_result=self._window_done)
         self.runner = Job("diagram", self._follow_diagram, dispatch)
         self.accuracy_job = Job(
             "accuracy", lambda run, t: accuracy.to_html(accuracy.compare_methods(run)),
@@ -95,8 +106,20 @@ class Explorer(pn.viewable.Viewer):
                                       cancel=self.cancel_research, pick=self.pick,
                                       downloads=self.downloads)
         self.controls.add_research(self.research.card)
-        self.settings.param.watch(self._on_settings, list(QUERY_NAMES))
+        self.compare = None                 # CompareView, built when first opened
+        self.compare_jobs: list[Job] = []
+        self._dispatch = dispatch
+        c.compare_toggle.param.watch(lambda e: self.show_compare(e.new), "value")
+        c.pin_toggle.param.watch(lambda e: self.pin(e.new), "value")
+        self.settings.param.watch(self._on_settings, [n for n in QUERY_NAMES
+                                                      if n not in state.DISPLAY_FIELDS])
+        self.settings.param.watch(self._on_display, list(state.DISPLAY_FIELDS))
+        self._on_display()
         self._apply()
+        if self._scene_key is not None:
+            self.controls.show_caption(BY_KEY[self._scene_key].caption)
+            self._scene_run = state.validate(
+                {**state.defaults(), **BY_KEY[self._scene_key].settings()})
         if errors:
             self._message("Some settings in the link were not valid and were replaced by "
                           "defaults: " + "; ".join(errors))
@@ -117,8 +140,8 @@ class Explorer(pn.viewable.Viewer):
 
     def _on_session_destroyed(self, session_context) -> None:
         """The tab is gone: stop its jobs and let the whole session be collected."""
-        for job in (self.scene_job, self.runner, self.accuracy_job, self.stability_job,
-                    self.branch_job, self.research_job):
+        for job in (self.scene_job, self.window_job, self.runner, self.accuracy_job,
+                    self.stability_job, self.branch_job, self.research_job, *self.compare_jobs):
             job.cancel()
         self._loop.close()
         self.release_links()
@@ -128,9 +151,74 @@ class Explorer(pn.viewable.Viewer):
 
     # -- settings -> jobs ----------------------------------------------------------------
 
+    def request(self, **values) -> None:
+        """Settings asked for by a view (a tap on the phase plane: x0, v0)."""
+        self.settings.param.update(**values)
+
+    def pin(self, on: bool) -> None:
+        """Keep the maps shown now as a faint overlay (or drop it)."""
+        for view in self.views:
+            if hasattr(view, "pin"):
+                view.pin(on)
+
+    def show_compare(self, visible: bool) -> None:
+        """Open (building it the first time) or close compare mode. Its panels come from
+        the shared caches: the Fig. 3 diagrams from app.diagram's, the Fig. 7 sections
+        from app.compute's."""
+        if visible and self.compare is None:
+            self.compare = CompareView()
+            self.compare.present(self.settings.presenter)
+            pool = None if self._doc is None else _SCENE_POOL
+            runs = {k: state.validate({**state.defaults(), **BY_KEY[k].settings()})
+                    for k in (*COMPARE_DIAGRAMS, *COMPARE_SECTIONS)}
+            sections = Job("compare-sections",
+                           lambda rs, t: {k: compute.section_columns(r) for k, r in rs.items()},
+                           self._dispatch, pool=pool,
+                           on_result=lambda rs, result: self._compare_sections(result))
+            self.compare_jobs.append(sections)
+            for key in COMPARE_DIAGRAMS:
+                job = Job(f"compare-{key}", self._compare_follower(key), self._dispatch)
+                self.compare_jobs.append(job)
+                job.submit(runs[key])
+            sections.submit({k: runs[k] for k in COMPARE_SECTIONS})
+        if self.compare is not None:
+            self.controls.show_compare(self.compare.root, visible)
+
+    def _compare_follower(self, key: str):
+        view = self.compare
+
+        def done(info):
+            view.diagram_finished(key, "complete" if info["done"] >= info["total"]
+                                  else "partial (time limit)")
+
+        def work(run, ticket):
+            view.diagram_started(key)
+            diagram.follow(run, ticket, lambda part, d, n: view.diagram_chunk(key, part), done,
+                           lambda text: view.diagram_finished(key, "failed"))
+        return work
+
+    def _compare_sections(self, result) -> None:
+        if isinstance(result, Exception):
+            log.warning("compare sections failed: %s: %s", type(result).__name__, result)
+            return
+        self.compare.show_sections(result)
+
+    def _on_display(self, *events) -> None:
+        """Presenter mode on or off: type sizes and line widths of every view."""
+        with pn.io.hold(self._doc):
+            for view in self.views:
+                view.present(self.settings.presenter)
+            if events or self.settings.presenter:   # a projector: plots take the width
+                self.controls.sidebar_toggle.value = not self.settings.presenter
+            if self.compare is not None:
+                self.compare.present(self.settings.presenter)
+            if events:
+                self._write_url()
+
     def load_scene(self, key: str) -> None:
         """Load one of the paper's scenes (all settings in one batch)."""
         sc = BY_KEY[key]
+        self._scene_key = key
         self.settings.param.update(**sc.settings())
         self.controls.show_caption(sc.caption)
         self._scene_run = self._wanted
@@ -258,6 +346,17 @@ class Explorer(pn.viewable.Viewer):
             ticket.send(self.research.finished, kind, block)
         ticket.finish()
 
+    def _request_window(self, run, start, end, pixels) -> None:
+        """A view wants the time series of [start, end] of ``run`` (a zoom, a pan)."""
+        self.window_job.submit((run, start, end, pixels))
+
+    def _window_done(self, request, result) -> None:
+        if isinstance(result, Exception):
+            log.warning("window failed: %s: %s", type(result).__name__, result)
+            return
+        for view in self.views:
+            view.show_window(request[0], result)
+
     def _on_accuracy(self) -> None:
         self.controls.show_accuracy(None)
         self.accuracy_job.submit(self.run)
@@ -348,4 +447,6 @@ class Explorer(pn.viewable.Viewer):
     def _write_url(self) -> None:
         loc = pn.state.location
         if loc is not None and self.run is not None and self._loaded:
-            loc.update_query(**state.to_query(self.run))
+            display = {n: getattr(self.settings, n) for n in state.DISPLAY_FIELDS}
+            # the whole query, so that a display setting back at its default leaves it
+            loc.search = "?" + urlencode(state.to_query(self.run, self._scene_key, display))

@@ -91,3 +91,11 @@ def release_links(layout) -> None:
         if id(key) in owned:
             Callback.registry.pop(key, None)
 
+
+
+# -- a Column laid out as a CSS grid (Panel 1.9.4) ----------------------------------------
+
+#: Stylesheet for a ``pn.Column`` displayed as a CSS grid. Upstream: Panel 1.9.4 renders
+#: a ``div.scroll-button`` (for ``scroll_button_threshold``) as the last child of every
+#: Column's shadow root; in a grid it is one more grid item and takes a row of its own.
+GRID_COLUMN_CSS = ".scroll-button { display: none !important; }"

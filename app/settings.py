@@ -14,6 +14,9 @@ that is computed automatically: those views compute on demand.
 A setting that affects none of them switches an extra result on or off (``branches``:
 the branch overlay, computed from the finished diagram; a ``flag``, 1 or 0 in the URL).
 
+A ``display`` setting (``presenter``) travels in the URL but is not part of a ``Run``
+and never causes a computation.
+
 Derived here: the ``Settings`` class (one ``param.Parameterized`` holding what the user
 typed, valid or not), ``QUERY_NAMES``, ``SCENE_FIELDS``, ``SECTION_FIELDS``,
 ``DIAGRAM_FIELDS``, and the method options passed to ``impactlib.simulate``
@@ -67,7 +70,7 @@ class Setting:
     doc: str
     affects: frozenset            # results that depend on it (SCENE, SECTION, DIAGRAM)
     group: str                    # sidebar card
-    widget: str = "input"         # "slider" | "input" | "select" | "checkbox"
+    widget: str = "input"         # "slider" | "input" | "select" | "checkbox" | "toggle"
     kind: str = "number"          # "number" | "integer" | "choice" | "flag" (on/off)
     lo: float | None = None       # valid range; None: unbounded
     hi: float | None = None
@@ -83,6 +86,15 @@ class Setting:
     choices: tuple = ()
     method: str | None = None     # used by this integration method only
     physical: bool = False        # an il.Params field (the core checks its own range)
+    display: bool = False         # only changes how results are shown (not part of a Run)
+
+
+    @property
+    def decimals(self) -> int | None:
+        """Decimal places of the widget's step (values are rounded to the step)."""
+        if self.step is None:
+            return None
+        return max(0, -int(f"{self.step:e}".split("e")[1]))
 
     @property
     def out_of_range(self) -> str:
@@ -197,19 +209,26 @@ SETTINGS: tuple[Setting, ...] = (
     Setting("basins_n", "basins cells per side", 100,
             f"Grid of the basins picture: n × n starts (2 … {BASINS_N_MAX}).", frozenset(),
             RESEARCH, kind="integer", lo=2, hi=BASINS_N_MAX, half=True),
+    Setting("presenter", "Presenter", False,
+            "Large type and thick lines for a projector (read from the back of the room).",
+            frozenset(), "header", widget="toggle", kind="flag", display=True),
 )
 
 BY_NAME = {s.name: s for s in SETTINGS}
 #: Every URL query name, in the order of SETTINGS.
 QUERY_NAMES = tuple(s.name for s in SETTINGS)
-NUMBER_FIELDS = tuple(s.name for s in SETTINGS if s.kind not in ("choice", "flag"))
-FLAG_FIELDS = tuple(s.name for s in SETTINGS if s.kind == "flag")
+NUMBER_FIELDS = tuple(s.name for s in SETTINGS if s.kind in ("number", "integer"))
+FLAG_FIELDS = tuple(s.name for s in SETTINGS if s.kind == "flag" and not s.display)
 CHOICE_FIELDS = tuple(s.name for s in SETTINGS if s.kind == "choice")
+#: Settings that only change how results are shown (not part of a Run).
+DISPLAY_FIELDS = tuple(s.name for s in SETTINGS if s.display)
+#: Significant digits of a number in a URL (and of every value computed with).
+URL_DIGITS = 10
 SCENE_FIELDS = frozenset(s.name for s in SETTINGS if SCENE in s.affects)
 SECTION_FIELDS = frozenset(s.name for s in SETTINGS if SECTION in s.affects)
 DIAGRAM_FIELDS = frozenset(s.name for s in SETTINGS if DIAGRAM in s.affects)
 #: Settings that are not il.Params fields (a Run holds them next to its Params).
-RUN_FIELDS = tuple(s.name for s in SETTINGS if not s.physical)
+RUN_FIELDS = tuple(s.name for s in SETTINGS if not s.physical and not s.display)
 METHODS = BY_NAME["method"].choices
 
 
@@ -227,10 +246,10 @@ def method_text(values, method: str) -> str:
 
 def _parameter(s: Setting) -> param.Parameter:
     common = dict(label=s.label, doc=s.doc)
+    if s.kind == "flag":
+        return param.Boolean(default=s.default, **common)
     if s.kind == "choice":
         return param.Selector(default=s.default, objects=list(s.choices), **common)
-    if s.kind == "flag":
-        return param.Boolean(s.default, **common)
     cls = param.Integer if s.kind == "integer" else param.Number
     extra = {"softbounds": s.soft} if s.soft else {}
     if s.step is not None:

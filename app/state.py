@@ -7,7 +7,16 @@ names every bad field; the app then keeps the last good ``Run`` on screen.
 
 The URL carries the whole state under the names in ``QUERY_NAMES``. ``psi`` in the
 URL is the Poincare section in time units, as in the paper (0 <= psi <= T); the
-settings hold it as a fraction of the period so that it follows omega.
+settings hold it as a fraction of the period so that it follows omega. ``scene``
+names the paper's scene the settings came from (its values are the base; numbers in
+the URL override them).
+
+Numbers are rounded before they are computed with: to the widget's step where it has
+one (a slider that sends 4.2299999999999995 computes 4.23), else to ``URL_DIGITS``
+significant digits; psi (a fraction of T in the widget, time in the URL) to the
+step grid, or else to the fraction that a ``URL_DIGITS``-digit time gives back. So the URL the app writes (at
+most ``URL_DIGITS`` significant digits) gives back exactly the same ``Run``, and the
+same scene data.
 """
 from __future__ import annotations
 
@@ -18,16 +27,17 @@ from collections.abc import Mapping
 
 import impactlib as il
 
-from .settings import (BY_NAME, CHOICE_FIELDS, DIAGRAM_FIELDS, FLAG_FIELDS, METHODS,
-                       NUMBER_FIELDS, OMEGA_MAX, QUERY_NAMES, RUN_FIELDS, SCENE_FIELDS,
-                       SETTINGS, SWEEP_RANGES, SYMBOLS, Settings)
+from .scenes import BY_KEY as SCENES_BY_KEY
+from .settings import (BY_NAME, CHOICE_FIELDS, DIAGRAM_FIELDS, DISPLAY_FIELDS, FLAG_FIELDS,
+                       METHODS, NUMBER_FIELDS, OMEGA_MAX, QUERY_NAMES, RUN_FIELDS, SCENE_FIELDS,
+                       SETTINGS, SWEEP_RANGES, SYMBOLS, URL_DIGITS, Settings)
 
-#: How a flag may be spelled in the URL.
-FLAG_TEXT = {"1": True, "true": True, "on": True, "yes": True,
-             "0": False, "false": False, "off": False, "no": False, "": False}
+#: URL name of the paper's scene the settings came from.
+SCENE_NAME = "scene"
+_TRUE, _FALSE = ("1", "true", "yes", "on"), ("0", "false", "no", "off", "")
 
-__all__ = ["METHODS", "QUERY_NAMES", "Run", "Settings", "defaults", "initial_settings",
-           "parse_query", "snapshot", "to_query", "validate"]
+__all__ = ["DISPLAY_FIELDS", "METHODS", "QUERY_NAMES", "Run", "Settings", "defaults",
+           "initial_settings", "parse_query", "scene_of", "snapshot", "to_query", "validate"]
 
 
 def defaults() -> dict:
@@ -98,6 +108,23 @@ def _in_range(s, x: float) -> bool:
     return s.kind != "integer" or float(x).is_integer()
 
 
+def significant(x: float, digits: int = URL_DIGITS) -> float:
+    """``x`` rounded to ``digits`` significant digits."""
+    return float(f"{x:.{digits}g}")
+
+
+def rounded(s, x: float) -> float:
+    """``x`` as computed with: on the widget's step grid (if that keeps it within the
+    setting's range), else to ``URL_DIGITS`` significant digits."""
+    if s.decimals is not None:
+        on_grid = round(x, s.decimals)
+        above = s.lo is None or (on_grid > s.lo if s.lo_open else on_grid >= s.lo)
+        below = s.hi is None or (on_grid < s.hi if s.hi_open else on_grid <= s.hi)
+        if above and below:
+            return on_grid
+    return significant(x)
+
+
 def validate(values: Mapping) -> Run:
     """Turn raw settings into a ``Run``; raise ValueError naming every bad field."""
     errors: list[str] = []
@@ -117,7 +144,7 @@ def validate(values: Mapping) -> Run:
             errors.append(f"{name}: {s.out_of_range}")
             clean[name] = float(v)          # still usable by the checks between fields
         else:
-            clean[name] = float(v)
+            clean[name] = float(v) if name == "psi" else rounded(s, float(v))
     for name in FLAG_FIELDS:
         v = values.get(name, False)
         if isinstance(v, bool):
@@ -153,6 +180,7 @@ def validate(values: Mapping) -> Run:
             errors.append(html.escape(str(exc)))
     if errors or params is None:
         raise ValueError("; ".join(errors) or "invalid settings")
+    clean["psi"] = psi_fraction(clean["psi"], params.T)
     rest = {_field(n): clean[n] for n in RUN_FIELDS}
     for name in ("bif_n", "map_n", "basins_n"):
         rest[name] = int(rest[name])
@@ -186,6 +214,27 @@ def _check_sweep_range(clean: dict, errors: list) -> None:
 
 # -- URL ---------------------------------------------------------------------------
 
+def psi_fraction(frac: float, period: float) -> float:
+    """The section's fraction of the period as computed with. psi travels in time units
+    (``URL_DIGITS`` digits), so the fraction is the one such a time gives back, exactly
+    as ``parse_query`` computes it; within 1e-9 of the slider's step grid it is the
+    grid value (a scene's 1/8 stays 0.125)."""
+    frac = min(significant(frac * period) / period, 1.0)
+    on_grid = round(frac, BY_NAME["psi"].decimals)
+    return on_grid if abs(frac - on_grid) <= 1e-9 else frac
+
+
+def scene_of(args: Mapping[str, object]) -> str | None:
+    """The scene key named in the URL (``scene=fig5``), or None."""
+    v = args.get(SCENE_NAME)
+    if isinstance(v, (list, tuple)):
+        v = v[-1] if v else ""
+    if isinstance(v, bytes):
+        v = v.decode("utf-8", "replace")
+    v = str(v or "").strip()
+    return v if v in SCENES_BY_KEY else None
+
+
 def parse_query(args: Mapping[str, object]) -> tuple[dict, list[str]]:
     """Settings from URL query arguments (str or bytes, or lists of them).
 
@@ -193,8 +242,11 @@ def parse_query(args: Mapping[str, object]) -> tuple[dict, list[str]]:
     at their default, psi converted from time units to a fraction of the period) and
     ``errors`` one message per bad field. Never raises.
     """
-    values = defaults()
+    scene = scene_of(args)
+    values = {**defaults(), **(SCENES_BY_KEY[scene].settings() if scene else {})}
     errors: list[str] = []
+    if scene is None and str(args.get(SCENE_NAME) or "").strip() not in ("", "[]"):
+        errors.append(f"scene: {_short(args.get(SCENE_NAME))} is not a scene of the paper")
     raw: dict[str, str] = {}
     for name in QUERY_NAMES:
         if name not in args:
@@ -207,17 +259,17 @@ def parse_query(args: Mapping[str, object]) -> tuple[dict, list[str]]:
         raw[name] = str(v).strip()
     for name, text in raw.items():
         s = BY_NAME[name]
+        if s.kind == "flag":
+            if text.lower() in _TRUE + _FALSE:
+                values[name] = text.lower() in _TRUE
+            else:
+                errors.append(f"{name}: {_short(text)} is not 1 or 0")
+            continue
         if s.kind == "choice":
             if text in s.choices:
                 values[name] = text
             else:
                 errors.append(f"{name}: {_short(text)} is not one of {', '.join(s.choices)}")
-            continue
-        if s.kind == "flag":
-            if text.lower() in FLAG_TEXT:
-                values[name] = FLAG_TEXT[text.lower()]
-            else:
-                errors.append(f"{name}: {_short(text)} is not 1 or 0")
             continue
         if s.optional and text.lower() in ("", "none"):
             values[name] = None
@@ -247,7 +299,7 @@ def parse_query(args: Mapping[str, object]) -> tuple[dict, list[str]]:
         if isinstance(omega, float) and omega > 0:
             period = 2 * math.pi / omega
             psi = values["psi"]
-            if 0 <= psi <= period * (1 + 1e-12):
+            if 0 <= psi <= period * (1 + 10.0 ** -(URL_DIGITS - 1)):
                 values["psi"] = min(psi / period, 1.0)
             else:
                 errors.append(f"psi: {_short(raw['psi'])} lies outside one period "
@@ -258,16 +310,30 @@ def parse_query(args: Mapping[str, object]) -> tuple[dict, list[str]]:
     return values, errors
 
 
-def to_query(run: Run) -> dict[str, str]:
-    """URL query arguments that restore ``run`` exactly (repr of floats round-trips)."""
-    q = {}
+def url_number(v) -> str:
+    """Shortest text that gives back ``v`` (a validated value has at most URL_DIGITS
+    significant digits; psi in time units is cut there and rounds back on parsing)."""
+    text = repr(v)
+    digits = len(text.split("e")[0].replace("-", "").replace(".", "").lstrip("0"))
+    return text if digits <= URL_DIGITS else f"{v:.{URL_DIGITS}g}"
+
+
+def to_query(run: Run, scene: str | None = None, display: Mapping | None = None) -> dict[str, str]:
+    """URL query arguments that restore ``run`` exactly, the scene it came from and the
+    display settings that are not at their default."""
+    q = {SCENE_NAME: scene} if scene else {}
     for s in SETTINGS:
+        if s.display:
+            v = (display or {}).get(s.name, s.default)
+            if v != s.default:
+                q[s.name] = ("1" if v else "0") if s.kind == "flag" else str(v)
+            continue
         v = (getattr(run.params, s.name) if s.physical else
              run.psi if s.name == "psi" else getattr(run, s.name))
         if isinstance(v, bool):
             q[s.name] = "1" if v else "0"
         elif v is not None:
-            q[s.name] = v if isinstance(v, str) else repr(v)
+            q[s.name] = v if isinstance(v, str) else url_number(v)
     return q
 
 

@@ -4,6 +4,7 @@ updated in place with a single ``source.data = {...}`` assignment.
 Adding a view: write ``app/views/<name>.py`` with a ``View`` subclass (see base.py) and
 list it in ``VIEWS`` below; the session builds it, lays it out and feeds it.
 """
+from .animation import AnimationView
 from .base import View
 from .bifurcation import BifurcationView
 from .branches import BranchesView
@@ -14,8 +15,8 @@ from .phase import PhaseView
 from .poincare import PoincareView
 
 #: The views of a page, in page order.
-VIEWS: tuple[type[View], ...] = (DisplacementView, PhaseView, ImpactMapView, PoincareView,
-                                 BifurcationView, LyapunovView, BranchesView)
+VIEWS: tuple[type[View], ...] = (DisplacementView, PhaseView, AnimationView, ImpactMapView,
+                                 PoincareView, BifurcationView, LyapunovView, BranchesView)
 
-__all__ = ["VIEWS", "BifurcationView", "BranchesView", "DisplacementView", "ImpactMapView",
-           "LyapunovView", "PhaseView", "PoincareView", "View"]
+__all__ = ["VIEWS", "AnimationView", "BifurcationView", "BranchesView", "DisplacementView",
+           "ImpactMapView", "LyapunovView", "PhaseView", "PoincareView", "View"]

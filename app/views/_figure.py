@@ -1,11 +1,12 @@
-"""Shared look of the five views."""
+"""Shared look of the views: figure defaults, presenter mode, hover and ranges."""
 from __future__ import annotations
 
-from bokeh.models import (AllIndices, AllLabels, BasicTicker, BasicTickFormatter,
+import weakref
+
+from bokeh.models import (AllIndices, AllLabels, BasicTicker, BasicTickFormatter, DataRange1d,
                           GlyphRenderer, LinearScale, UnionRenderers)
 from bokeh.plotting import figure
 
-HEIGHT = 300
 #: Tool sets by kind of view (each tool is a model in every page; box zoom is four).
 TIME_SERIES_TOOLS = "xpan,xwheel_zoom,reset"
 CURVE_TOOLS = "pan,wheel_zoom,reset"
@@ -13,22 +14,62 @@ POINTS_TOOLS = "pan,wheel_zoom,box_zoom,reset"
 LINE = "#1f5fa8"
 IMPACT = "#d1495b"
 WALL = "#444444"
+STICK = "#f2b134"
+
+#: (tick labels, axis labels, title) font sizes, normal and presenter mode.
+FONTS = {False: ("12px", "13px", "14px"), True: ("18px", "20px", "22px")}
+#: Presenter mode multiplies line widths and marker sizes by these.
+LINE_SCALE, SIZE_SCALE = 2.0, 1.6
+#: Line widths and marker sizes of each figure's glyphs as built (presenter mode scales
+#: these, so toggling it twice gives back the same figure).
+_BASE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 def make_figure(name: str, title: str, x_label: str, y_label: str, **kw):
-    """A figure sized to stretch across its column, with readable labels."""
+    """A figure that fills its cell of the page grid (the page sizes the cells)."""
+    kw.pop("height", None)
     fig = figure(name=name, title=title, x_axis_label=x_label, y_axis_label=y_label,
-                 height=kw.pop("height", HEIGHT), sizing_mode="stretch_width",
-                 min_width=280, tools=kw.pop("tools", POINTS_TOOLS),
+                 sizing_mode="stretch_both", min_width=120, min_height=80,
+                 tools=kw.pop("tools", POINTS_TOOLS),
                  toolbar_location=kw.pop("toolbar_location", "right"),
                  output_backend="canvas", **kw)
-    fig.title.text_font_size = "14px"
     for axis in (fig.xaxis, fig.yaxis):
-        axis.axis_label_text_font_size = "13px"
         axis.axis_label_text_font_style = "normal"
-        axis.major_label_text_font_size = "12px"
     fig.toolbar.logo = None
+    style(fig, presenter=False)
     return fig
+
+
+def style(fig, presenter: bool) -> None:
+    """Type sizes and line widths of ``fig`` for the screen (False) or a projector."""
+    ticks, labels, title = FONTS[bool(presenter)]
+    fig.title.text_font_size = title
+    for axis in fig.xaxis + fig.yaxis:
+        axis.major_label_text_font_size = ticks
+        axis.axis_label_text_font_size = labels
+        if hasattr(axis.ticker, "desired_num_ticks"):   # large labels need room
+            axis.ticker.desired_num_ticks = 4 if presenter else 6
+    base = _BASE.setdefault(fig, {})
+    for r in fig.renderers:
+        if not isinstance(r, GlyphRenderer):
+            continue
+        for glyph in (r.glyph, r.nonselection_glyph, r.selection_glyph):
+            if glyph is None or glyph == "auto":
+                continue
+            for prop, scale in (("line_width", LINE_SCALE), ("size", SIZE_SCALE)):
+                if prop in glyph.properties() and isinstance(getattr(glyph, prop), (int, float)):
+                    key = f"{glyph.id}.{prop}"
+                    base.setdefault(key, getattr(glyph, prop))
+                    setattr(glyph, prop, base[key] * (scale if presenter else 1.0))
+
+
+def auto_range_over(fig, *renderers) -> None:
+    """Auto-ranging (DataRange1d) looks at ``renderers`` only: glyphs moved by the
+    animation in the browser then never change a range (a range change would travel
+    to the server every frame)."""
+    for rng in (fig.x_range, fig.y_range):
+        if isinstance(rng, DataRange1d):
+            rng.renderers = list(renderers)
 
 
 def padded(values, include=(), min_span: float = 0.1, pad: float = 0.06):

@@ -5,14 +5,37 @@ every view in ``app.views.VIEWS`` and never needs to know which view shows what.
 """
 from __future__ import annotations
 
+from collections.abc import Callable
+
+from ._figure import style
+
 
 class View:
     #: Attribute of the session that holds this view (``session.displacement``).
     key = ""
     #: Full page width below the diagram's progress row (else one cell of the grid).
     wide = False
+    #: "What am I looking at": one or two sentences shown on request next to the view.
+    note = ""
 
     figure = None
+    #: A CustomJS to run once the page is ready (None: nothing to run).
+    ready = None
+    #: Asks the session to change settings (``request(x0=…, v0=…)``); set by the session.
+    request: Callable[..., None] = staticmethod(lambda **settings: None)
+    #: Asks the session for the time series of a window (``request_window(run, start,
+    #: end, pixels)``); set by the session.
+    request_window: Callable[..., None] = staticmethod(lambda run, start, end, pixels: None)
+
+    @property
+    def root(self):
+        """The Bokeh model the page lays out (the figure, or the figure and its own
+        controls)."""
+        return self.figure
+
+    def present(self, presenter: bool) -> None:
+        """Large type and thick lines for a projector (True), or the screen (False)."""
+        style(self.figure, presenter)
 
     def link(self, views: dict) -> None:
         """Once every view of the page exists (``views`` by key): share a range with, or
@@ -20,6 +43,9 @@ class View:
 
     def show_scene(self, scene) -> None:
         """A new trajectory (``app.compute.SceneData``: run, trajectory, impacts)."""
+
+    def show_window(self, run, columns: dict) -> None:
+        """Samples (t, x, v) of the time window asked for with ``request_window``."""
 
     def show_section(self, run, section: dict) -> None:
         """A new Poincaré section (columns t, x, v) of ``run``."""

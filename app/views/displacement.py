@@ -1,10 +1,18 @@
-"""View 1: displacement x(t) with the wall at g and the impacts marked."""
+"""View 1: displacement x(t) with the wall at g, the impacts marked and the sticking
+intervals shaded; the animation's time cursor moves on it.
+
+The line is sampled for the window on screen: each zoom or pan asks the session for
+that window's samples (``app.compute.window_columns``: enough per period and per pixel,
+exact impact corners); until they arrive it shows the scene's own samples."""
 from __future__ import annotations
 
-from bokeh.models import ColumnDataSource, Range1d, Span
+from bokeh.core.property.descriptors import UnsetValueError
+from bokeh.events import RangesUpdate
+from bokeh.models import ColumnDataSource, HoverTool, Range1d, Span
 
 from ..compute import SceneData
-from ._figure import IMPACT, LINE, TIME_SERIES_TOOLS, WALL, make_figure
+from ._figure import (IMPACT, LINE, STICK, TIME_SERIES_TOOLS, WALL, auto_range_over,
+                      make_figure)
 from .base import View
 
 #: The x axis opens on the last few periods; reset/zoom out shows the whole window.
@@ -13,32 +21,80 @@ PERIODS_SHOWN = 8
 
 class DisplacementView(View):
     key = "displacement"
+    note = ("The mass's position against time. Red dots: impacts on the wall (dashed "
+            "line at g); yellow bands: the mass rests on the wall (sticking). Zoom out "
+            "for the whole recorded window.")
 
     def __init__(self):
-        self.source = ColumnDataSource({"t": [], "x": []})
-        self.impacts = ColumnDataSource({"t": [], "x": []})
-        self.figure = make_figure("displacement_figure", "Displacement x(τ)",
-                                  "time τ (s)", "displacement x",
-                                  x_range=Range1d(0.0, 1.0), tools=TIME_SERIES_TOOLS)
+        #: The scene's dense samples (t, x, v) with exact impact corners; the animation
+        #: plays from this source in the browser.
+        self.source = ColumnDataSource({"t": [], "x": [], "v": []})
+        self.impacts = ColumnDataSource({"t": [], "x": [], "v": []})
+        self.sticking = ColumnDataSource({"start": [], "end": []})
+        # moved by the animation in the browser only: never sent back to the server
+        self.cursor = ColumnDataSource({"t": [0.0], "x": [0.0]}, syncable=False)
+        self.figure = fig = make_figure("displacement_figure", "Displacement x(τ)",
+                                        "time τ (s)", "displacement x",
+                                        x_range=Range1d(0.0, 1.0), tools=TIME_SERIES_TOOLS)
+        fig.vstrip(x0="start", x1="end", source=self.sticking, fill_color=STICK,
+                   fill_alpha=0.35, line_alpha=0, name="displacement_sticking",
+                   level="underlay")
         self.wall = Span(location=0.0, dimension="width", line_color=WALL,
                          line_dash="dashed", line_width=1.5, name="displacement_wall")
-        self.figure.add_layout(self.wall)
-        self.figure.line("t", "x", source=self.source, line_color=LINE, line_width=1.2,
-                         name="displacement")
-        self.figure.scatter("t", "x", source=self.impacts, size=4, color=IMPACT,
-                            name="displacement_impacts")
+        fig.add_layout(self.wall)
+        line = fig.line("t", "x", source=self.source, line_color=LINE, line_width=1.2,
+                        name="displacement")
+        dots = fig.scatter("t", "x", source=self.impacts, size=4, color=IMPACT,
+                           name="displacement_impacts")
+        # on the overlay layer: a frame of the animation repaints the cursor, not x(t)
+        fig.vspan(x="t", source=self.cursor, line_color="#2a9d8f", line_width=2,
+                  line_alpha=0.8, name="displacement_cursor", level="overlay")
+        auto_range_over(fig, line, dots)
+        fig.add_tools(HoverTool(renderers=[line], mode="vline", tooltips=[
+            ("τ", "@t{0.000} s"), ("x", "@x{0.0000}"), ("ẋ", "@v{0.0000}")]))
+        self.run = None
+        self._asked = None
+        fig.on_event(RangesUpdate, self._on_ranges)
+
+    def _pixels(self) -> int:
+        """Width of the plot area in the browser (before the first render: a guess)."""
+        try:
+            return int(self.figure.inner_width)
+        except UnsetValueError:     # not rendered yet
+            return 1000
+
+    def _on_ranges(self, event) -> None:
+        if self.run is None or event.x0 is None or event.x1 is None:
+            return
+        window = (self.run, event.x0, event.x1, self._pixels())
+        if window != self._asked:
+            self._ask(*window)
+
+    def _ask(self, *window) -> None:
+        self._asked = window
+        self.request_window(*window)
+
+    def show_window(self, run, columns: dict) -> None:
+        if run is not self.run:
+            return
+        self.source.data = columns
+        envelope = len(columns["v"]) > 0 and columns["v"][0] != columns["v"][0]
+        self.figure.title.text = ("Displacement x(τ)"
+                                  + (", envelope: zoom in" if envelope else ""))
 
     def show_scene(self, scene: SceneData) -> None:
         g = scene.run.params.g
         tr = scene.trajectory
-        self.source.data = {"t": tr["t"], "x": tr["x"]}
+        self.source.data = {"t": tr["t"], "x": tr["x"], "v": tr["v"]}
         t = scene.impacts["t"]
-        self.impacts.data = {"t": t, "x": [g] * len(t)}
+        self.impacts.data = {"t": t, "x": [g] * len(t), "v": scene.impacts["v"]}
+        self.sticking.data = dict(scene.sticking)
         self.wall.location = g
-        run = scene.run
+        self.run = run = scene.run
         start = max(run.t_record, run.t_end - PERIODS_SHOWN * run.params.T)
         self.figure.x_range.update(start=start, end=run.t_end, reset_start=start,
                                    reset_end=run.t_end)
-        self.figure.title.text = f"Displacement x(τ), impacts in red, wall at g = {g:g}"
-        self.figure.xaxis.axis_label = (f"time τ (s) — last {PERIODS_SHOWN} periods shown; "
-                                        f"zoom out for {run.t_record:g}–{run.t_end:g} s")
+        self.figure.title.text = "Displacement x(τ)"
+        self.figure.xaxis.axis_label = (f"time τ (s); zoom out: {run.t_record:g}–"
+                                        f"{run.t_end:g} s")
+        self._ask(run, start, run.t_end, self._pixels())

@@ -1,7 +1,7 @@
 """View 3: impact map, impact phase τ_I mod T against the velocity before impact."""
 from __future__ import annotations
 
-from bokeh.models import ColumnDataSource, Range1d
+from bokeh.models import ColumnDataSource, HoverTool, Range1d
 
 from ..compute import SceneData
 from ._figure import IMPACT, make_figure, padded, set_range
@@ -10,20 +10,37 @@ from .base import View
 
 class ImpactMapView(View):
     key = "impact_map"
+    note = ("One dot per impact: when in the forcing period it happens (phase) and how "
+            "fast the mass hits. One dot: one impact per period; a cloud: chaos.")
 
     def __init__(self):
-        self.source = ColumnDataSource({"phase": [], "v": []})
+        self.source = ColumnDataSource({"phase": [], "v": [], "t": []})
+        self.pinned = None        # the overlay's source, made on the first pin
         self.figure = make_figure("impact_map_figure", "Impact map",
                                   "impact phase τ_I mod T (s)", "impact velocity ẋ(τ_I−)",
                                   x_range=Range1d(0.0, 3.14159), y_range=Range1d(-1.0, 0.0))
-        self.figure.scatter("phase", "v", source=self.source, size=5, color=IMPACT,
-                            alpha=0.8, name="impact_map")
+        dots = self.figure.scatter("phase", "v", source=self.source, size=5, color=IMPACT,
+                                   alpha=0.8, name="impact_map")
+        self.figure.add_tools(HoverTool(renderers=[dots], tooltips=[
+            ("τ_I", "@t{0.000} s"), ("phase", "@phase{0.0000} s"),
+            ("impact velocity", "@v{0.0000}")]))
+
+    def pin(self, on: bool) -> None:
+        """Keep the points shown now as a faint overlay (False: drop it)."""
+        if self.pinned is None:
+            if not on:
+                return
+            self.pinned = ColumnDataSource({"phase": [], "v": []})
+            r = self.figure.scatter("phase", "v", source=self.pinned, size=5,
+                                    color="#999999", alpha=0.35, name="impact_map_pinned")
+            self.figure.renderers = [r] + [x for x in self.figure.renderers if x is not r]
+        self.pinned.data = ({"phase": self.source.data["phase"], "v": self.source.data["v"]}
+                            if on else {"phase": [], "v": []})
 
     def show_scene(self, scene: SceneData) -> None:
         imp = scene.impacts
-        self.source.data = {"phase": imp["phase"], "v": imp["v"]}
+        self.source.data = {"phase": imp["phase"], "v": imp["v"], "t": imp["t"]}
         T = scene.run.params.T
         set_range(self.figure.x_range, 0.0, T)
         set_range(self.figure.y_range, *padded(imp["v"], include=(0.0,)))
-        n = len(imp["t"])
-        self.figure.title.text = f"Impact map — {n} impacts, T = {T:.4g} s"
+        self.figure.title.text = f"Impact map, T = {T:.4g} s"

@@ -146,6 +146,38 @@ def read_csv(buf):
     return rows[0], np.array(rows[1:], dtype=float)
 
 
+def csv_settings(buf) -> dict:
+    """The ``# name = value`` block at the top of a CSV download."""
+    out = {}
+    for line in buf.getvalue().splitlines():
+        if not line.startswith("#"):
+            break
+        name, _, value = line[1:].partition("=")
+        out[name.strip()] = value.strip()
+    return out
+
+
+def test_csv_files_start_with_the_settings_they_were_computed_with(make_explorer):
+    e = make_explorer(omega="2.81", r="0.6", c="0.07", g="0.1", m="1.5", k="2",
+                      t_end="400", t_record="300", method="rk45")
+    import importlib.metadata
+    for make in (e.downloads.impacts_csv, e.downloads.poincare_csv,
+                 e.downloads.bifurcation_csv):
+        buf = make()
+        got = csv_settings(buf)
+        assert list(got) == ["m", "c", "k", "g", "r", "omega", "psi", "t_end", "t_record",
+                             "method", "version"]
+        assert {n: float(got[n]) for n in ("m", "c", "k", "g", "r", "omega", "t_end",
+                                           "t_record")} == {
+            "m": 1.5, "c": 0.07, "k": 2.0, "g": 0.1, "r": 0.6, "omega": 2.81,
+            "t_end": 400.0, "t_record": 300.0}
+        assert float(got["psi"]) == 0.0 and got["method"] == "rk45"
+        assert got["version"] == importlib.metadata.version("impact-explorer")
+        # one header row follows, then numbers only
+        head, data = read_csv(buf)
+        assert len(head) == data.shape[1] and len(data) > 0
+
+
 def test_csv_downloads_hold_what_is_shown(make_explorer):
     e = make_explorer()
     head, data = read_csv(e.downloads.impacts_csv())
@@ -218,3 +250,112 @@ def test_accuracy_readout_reports_an_unstable_rk4_step():
     run = state.validate({**state.defaults(), "dt": 10.0})
     rk4 = accuracy.compare_methods(run)[1]
     assert rk4.method == "rk4" and "stability" in rk4.message
+
+
+def test_time_plot_is_sampled_for_the_window_on_screen(make_explorer):
+    """t_end = 20000 s: the scene's 4000 samples would be one per 5 s (T = 2.24 s).
+    The window shown gets >= 48 samples per period and every impact in it as an exact
+    corner (x = g at the scene's own impact times, bit for bit)."""
+    from app import compute
+    e = make_explorer(omega="2.81", t_end="20000", t_record="250")
+    T = e.run.params.T
+    t = np.asarray(e.displacement.source.data["t"])
+    assert t[0] == pytest.approx(20000 - 8 * T) and t[-1] == pytest.approx(20000)
+    assert np.max(np.diff(t)) <= T / compute.SAMPLES_PER_PERIOD * 1.001
+    cols = compute.window_columns(e.run, 19000.0, 19020.0, 800)
+    t, x = cols["t"], cols["x"]
+    imp = np.asarray(e.scene.impacts["t"])
+    inside = imp[(imp > 19000) & (imp < 19020)]
+    assert inside.size > 0
+    for ti in inside:
+        at = np.flatnonzero(t == ti)
+        assert at.size == 2 and np.all(x[at] == 0.0), ti    # the corner: (g, v-), (g, v+)
+    # zoomed all the way out: the envelope per pixel column, not a zig-zag
+    env = compute.window_columns(e.run, 250.0, 20000.0, 800)
+    assert len(env["t"]) <= 2 * 800 and np.all(np.isnan(env["v"]))
+    # it spans the motion: down to the wall, up to (within 27 samples per period of
+    # chord error, < 1 %) the highest x of the finely sampled 20 s above
+    assert env["x"].min() == 0.0 and env["x"].max() >= 0.99 * x.max()
+
+
+def test_window_samples_match_the_linear_closed_form(make_explorer):
+    """No impacts (wall far away): x(t) in a zoomed window is the steady state
+    X cos(ωt − φ) of the linear oscillator (the transient has decayed by e^-20)."""
+    from app import compute
+    m, c, k, w = 1.0, 0.05, 1.0, 1.3
+    e = make_explorer(g="-10", m=str(m), c=str(c), k=str(k), omega=str(w))
+    cols = compute.window_columns(e.run, 400.0, 420.0, 600)
+    X = 1 / math.hypot(k - m * w * w, 2 * c * w)
+    phi = math.atan2(2 * c * w, k - m * w * w)
+    assert len(cols["t"]) >= 20 / (2 * math.pi / w) * compute.SAMPLES_PER_PERIOD
+    assert np.allclose(cols["x"], X * np.cos(w * cols["t"] - phi), atol=1e-6)
+
+
+def test_compare_mode_shows_fig3_and_fig7_on_shared_fixed_axes(make_explorer):
+    """Built only when opened; the six diagrams and four sections come from the shared
+    caches and fit the fixed axes; every panel of a figure shares its ranges."""
+    from app import compute, diagram, state as st
+    from app.scenes import BY_KEY as SC
+    from app.views import compare
+    e = make_explorer()
+    assert e.compare is None
+    e.controls.compare_toggle.value = True
+    for job in e.compare_jobs:
+        assert job.done.wait(120), job.name
+    diagrams = [e.compare.diagrams[k] for k in compare.DIAGRAMS]
+    assert len({id(f.x_range) for _, f in diagrams}) == 1
+    assert len({id(f.y_range) for _, f in diagrams}) == 1
+    lo, hi = compare.V_RANGE
+    for key, (src, fig) in zip(compare.DIAGRAMS, diagrams):
+        v = np.asarray(src.data["v"])
+        assert v.size > 100 and lo <= v.min() and v.max() <= hi, (key, v.min(), v.max())
+        run = st.validate({**st.defaults(), **SC[key].settings()})
+        assert run.diagram_key() in diagram.CACHE          # computed once, shared
+        assert (fig.y_range.start, fig.y_range.end) == compare.V_RANGE   # fixed
+    for key in compare.SECTIONS:
+        src, fig = e.compare.sections[key]
+        run = st.validate({**st.defaults(), **SC[key].settings()})
+        ref = compute.section_columns(run)
+        assert np.array_equal(src.data["x"], ref["x"]) and len(ref["x"]) > 50
+        assert compare.SECTION_X[0] <= min(ref["x"]) and max(ref["x"]) <= compare.SECTION_X[1]
+        assert compare.SECTION_V[0] <= min(ref["v"]) and max(ref["v"]) <= compare.SECTION_V[1]
+    e.controls.compare_toggle.value = False
+
+
+def test_pin_keeps_the_maps_as_an_overlay(make_explorer):
+    e = make_explorer()
+    before = np.asarray(e.impact_map.source.data["v"]).copy()
+    e.controls.pin_toggle.value = True
+    e.settings.omega = 2.5
+    e.scene_job.done.wait(30)
+    assert np.array_equal(e.impact_map.pinned.data["v"], before)
+    assert not np.array_equal(e.impact_map.source.data["v"], before)
+    e.controls.pin_toggle.value = False
+    assert len(e.impact_map.pinned.data["v"]) == 0 and len(e.poincare.pinned.data["x"]) == 0
+
+
+def test_every_scene_view_has_a_hover_readout(make_explorer):
+    from bokeh.models import HoverTool
+    e = make_explorer()
+    for view in (e.displacement, e.phase, e.impact_map, e.poincare, e.animation):
+        hovers = [t for t in view.figure.tools if isinstance(t, HoverTool)]
+        assert hovers, view.key
+        for h in hovers:     # each reads a renderer of its own figure
+            assert h.renderers and all(r in view.figure.renderers for r in h.renderers)
+
+
+@pytest.mark.parametrize("view_key", ["phase", "poincare"])
+def test_tap_starts_the_motion_there(make_explorer, view_key):
+    """A tap at (x, ẋ) sets x0, v0 (4 significant digits); beyond the wall x0 = g."""
+    from types import SimpleNamespace
+    from bokeh.events import Tap
+    e = make_explorer(g="0.25")
+    fig = getattr(e, view_key).figure
+    handler = fig._event_callbacks[Tap.event_name][0]
+    handler(SimpleNamespace(x=0.73214, y=-0.41236))
+    e.scene_job.done.wait(30)
+    assert (e.settings.x0, e.settings.v0) == (0.7321, -0.4124)
+    assert (e.run.x0, e.run.v0) == (0.7321, -0.4124)
+    handler(SimpleNamespace(x=0.1, y=0.5))             # x < g = 0.25
+    e.scene_job.done.wait(30)
+    assert (e.run.x0, e.run.v0) == (0.25, 0.5)

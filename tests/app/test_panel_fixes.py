@@ -25,3 +25,5 @@ def test_the_private_parts_the_workarounds_touch_exist():
     for name in ("_dispatch_msgs", "_dispatch_write_task", "_WRITE_BLOCK", "_WRITE_MSGS"):
         assert hasattr(pdoc, name), name                 # deliver_stranded_writes
     assert hasattr(Callback, "registry")                 # release_links
+    import panel as pn
+    assert "scroll_button_threshold" in pn.Column.param      # GRID_COLUMN_CSS

@@ -84,3 +84,39 @@ def test_url_round_trip(omega, r, c, g, m, k, psi, t_end):
     run2 = state.validate(back)
     assert run2.params == run.params and run2.t_end == run.t_end
     assert run2.psi_frac == pytest.approx(run.psi_frac, abs=1e-12)
+
+
+@hsettings(max_examples=80, deadline=None)
+@given(omega=st.floats(0.05, 6), r=st.floats(0, 1), c=st.floats(0, 0.5),
+       g=st.floats(-1, 1), m=st.floats(1e-3, 1e3), psi=st.floats(0, 1),
+       t_end=st.floats(1, 20000))
+def test_written_url_is_short_and_gives_back_the_same_run(omega, r, c, g, m, psi, t_end):
+    """Any value a slider or a box may send: the URL written has at most 10 significant
+    digits per number and parses back to exactly the same Run (so the same data)."""
+    values = {**state.defaults(), "omega": omega, "r": r, "c": c, "g": g, "m": m,
+              "psi": psi, "t_end": t_end, "t_record": t_end / 2}
+    run = state.validate(values)
+    q = state.to_query(run)
+    for name, text in q.items():
+        if name != "method":
+            mantissa = text.lower().split("e")[0].replace("-", "").replace(".", "")
+            assert len(mantissa.lstrip("0").rstrip("0") or "0") <= 10, (name, text)
+    back, errors = state.parse_query(q)
+    assert errors == [] and state.validate(back) == run
+
+
+def test_slider_noise_is_computed_on_the_step_grid():
+    run = state.validate({**state.defaults(), "omega": 4.2299999999999995,
+                          "r": 0.30000000000000004, "psi": 0.37500000000000006})
+    assert (run.params.omega, run.params.r, run.psi_frac) == (4.23, 0.3, 0.375)
+    assert state.to_query(run)["omega"] == "4.23"
+
+
+def test_scene_in_the_link_is_the_base_and_numbers_override_it():
+    values, errors = state.parse_query({"scene": "fig5", "omega": "1.25"})
+    assert errors == []
+    assert (values["omega"], values["t_end"], values["t_record"]) == (1.25, 3000.0, 2500.0)
+    values, errors = state.parse_query({"scene": "fig99"})
+    assert values == state.defaults() and errors and errors[0].startswith("scene:")
+    run = state.validate(state.parse_query({"scene": "fig4"})[0])
+    assert state.to_query(run, "fig4")["scene"] == "fig4"

@@ -145,7 +145,7 @@ def test_scene_picker_loads_its_settings(page, server):
     page.locator(".ie-scene select").select_option(label="Fig 7b · ψ=3T/8")
     page.wait_for_function("() => Math.abs(ie.model('bifurcation_marker').location - 2.8) < 1e-9",
                            timeout=10_000)
-    page.wait_for_function("() => ie.title('poincare_figure').startsWith('Poincaré map at ψ = 0.375 T')",
+    page.wait_for_function("() => ie.title('poincare_figure').startsWith('Poincaré map, ψ = 0.375 T')",
                            timeout=10_000)
     assert page.locator(".ie-w-omega input").first.input_value() == "2.800"
     assert "Fig. 7(b)" in text(page, "ie-caption")
@@ -212,7 +212,8 @@ def test_accuracy_readout_and_csv_download(page, server):
         page.get_by_text("Impacts (CSV)").click()
     download = info.value
     assert download.suggested_filename == "impacts_omega2_r0.8_c0.05_g0.csv"
-    lines = Path(download.path()).read_text().splitlines()
+    lines = [line for line in Path(download.path()).read_text().splitlines()
+             if not line.startswith("#")]
     assert lines[0] == "t,phase,v_before,v_after"
     assert len(lines) - 1 == page.evaluate("ie.len('impact_map')")
 
@@ -245,6 +246,7 @@ def test_slider_to_repaint_latency(page, server):
     assert statistics.median(samples) < 500, samples   # target 150 ms; see app_figures.md
 
 
+<<<<<<< HEAD
 #: Bokeh models a page may hold at the paper defaults: the five views, controls and
 #: status of the session-cost work came to 171 (target 180); the Lyapunov strip under the
 #: diagram adds 12 and the stability readout with the branches box 9 (192 measured).
@@ -252,11 +254,25 @@ MODEL_BUDGET = 200
 
 
 def test_page_bokeh_models_within_budget(page, server):
+=======
+#: The five views and their page: 180 models. The classroom page adds the animation (a
+#: sixth figure with its player: ~30), cursors and sticking bands (~12), a hover tool per
+#: view (5), the header's presenter / compare / pin / PNG / sidebar controls and notes
+#: (~8); measured 234. Compare mode, the accuracy panel and pin overlays are built on use.
+MAX_MODELS = 240
+
+
+def test_page_has_at_most_240_bokeh_models(page, server):
+>>>>>>> classroom
     """A count, not a timing: every model is built, serialised and sent per session
     (the sidebar's collapsed cards and the research card are built when opened)."""
     open_app(page, server)
     n = page.evaluate("Bokeh.documents[0].all_models.size")
+<<<<<<< HEAD
     assert n <= MODEL_BUDGET, n
+=======
+    assert n <= MAX_MODELS, n
+>>>>>>> classroom
 
 
 def test_server_log_has_no_traceback(server):
