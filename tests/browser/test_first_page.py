@@ -11,13 +11,14 @@ default 10), and with the first scene held until just after the pull
 import json
 import os
 import signal
+import socket
 import subprocess
 import sys
 import time
 import urllib.request
 from pathlib import Path
 
-from conftest import ROOT, _free_port
+ROOT = Path(__file__).resolve().parents[2]
 
 ROUNDS = int(os.environ.get("FIRST_PAGE_ROUNDS", "10"))
 SCENE_VIEWS = ("displacement", "phase", "impact_map", "poincare")
@@ -31,6 +32,12 @@ FILLED = """() => {
     return d[k] && d[k].length > 0;
   });
 }""" % json.dumps(list(SCENE_VIEWS))
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
 
 
 def _serve(log_path: Path, setup: str | None = None):
