@@ -389,6 +389,7 @@ class Explorer(pn.viewable.Viewer):
             for view in self.views:
                 view.show_section(run, section)
         self.run, self.scene, self.section = run, scene, section
+        self.research.show_settings(run)
         self._mark_caption()
         self._write_url()
 

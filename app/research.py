@@ -20,7 +20,7 @@ import numpy as np
 import impactlib as il
 from impactlib.classify import describe
 
-from .settings import SWEEP_RANGES, SYMBOLS
+from .settings import SWEEP_RANGES
 from .state import Run
 
 #: Wall time of one regime map / basins picture; rows not started by then are left out.
@@ -238,7 +238,3 @@ def attractor_text(att) -> str:
     """'3-impact period-3 at (0.123, -0.456)' (two attractors can share a label)."""
     x, v = att.points[0]
     return f"{att.label} through ({x:.3g}, {v:.3g})"
-
-
-def symbol(name: str) -> str:
-    return SYMBOLS[name]

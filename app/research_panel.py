@@ -10,9 +10,12 @@ blocks here; nothing here computes.
 """
 from __future__ import annotations
 
+import dataclasses
 import time
 
 import panel as pn
+
+from . import research
 
 from .controls import NamedHTML
 
@@ -159,4 +162,17 @@ class ResearchPanel:
         self._scene = scene
         for view in self.views.values():
             view.show_scene(scene)
+
+    def show_settings(self, run) -> None:
+        """Say on a picture when the settings it depends on changed since it was made
+        (moving the marked point or the start does not count)."""
+        for kind, view in self.views.items():
+            req = view.request
+            if req is None or self.running == kind:
+                continue
+            if kind == MAP:
+                now = research.map_request(run).key()
+            else:
+                now = dataclasses.replace(req, run=run).key()
+            view.mark_stale(now != self._keys.get(kind))
 

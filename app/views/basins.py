@@ -32,6 +32,7 @@ class BasinsView(View):
         self.rows_done = 0
         self.message = ""
         self._pick = None
+        self._end = ""
         self.figure = make_figure("basins_figure", "Basins of attraction",
                                   "initial position x₀", "initial velocity v₀",
                                   x_range=Range1d(0.0, 1.0), y_range=Range1d(-1.0, 1.0),
@@ -105,7 +106,13 @@ class BasinsView(View):
         self.source.data = {**self.source.data, "image": [self.image]}
 
     def finished(self, text: str) -> None:
+        self._end = text
         self.figure.title.text = f"{self._title()} — {text}"
+
+    def mark_stale(self, stale: bool) -> None:
+        """Note in the title that the settings changed since this picture was made."""
+        note = " (settings changed since: compute again)" if stale else ""
+        self.figure.title.text = f"{self._title()} — {self._end}{note}"
 
     def show_scene(self, scene) -> None:
         run = scene.run

@@ -50,6 +50,7 @@ class RegimeMapView(View):
         self.legend = legend_html([])
         self.rows_done = 0
         self._pick = None
+        self._end = ""
         lo_x, hi_x = SWEEP_RANGES["omega"]
         lo_y, hi_y = SWEEP_RANGES["r"]
         self.figure = make_figure("regime_map_figure", "Regime map", AXIS_LABELS["omega"],
@@ -112,7 +113,13 @@ class RegimeMapView(View):
         self.source.data = {**self.source.data, "image": [self.image]}
 
     def finished(self, text: str) -> None:
+        self._end = text
         self.figure.title.text = f"{self._title()} — {text}"
+
+    def mark_stale(self, stale: bool) -> None:
+        """Note in the title that the settings changed since this picture was made."""
+        note = " (settings changed since: compute again)" if stale else ""
+        self.figure.title.text = f"{self._title()} — {self._end}{note}"
 
     def show_scene(self, scene) -> None:
         self._mark(scene.run.params)

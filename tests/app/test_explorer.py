@@ -1,7 +1,6 @@
 """The app's state logic without a browser: build a session, change a setting, assert on
 the views' ``source.data``. Numbers are checked against closed forms, not our output."""
 import csv
-import io
 import math
 
 import numpy as np

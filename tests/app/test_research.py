@@ -235,3 +235,17 @@ def test_csv_headers_name_every_setting_and_parse(make_explorer):
     assert all(f"attractor {a}" in got for a in found)
     assert any("1-impact period-1" in got[f"attractor {a}"] for a in found)
     assert data[:, 0].min() >= float(got["x_min"]) and data[:, 0].max() <= float(got["x_max"])
+
+
+def test_a_picture_says_when_its_settings_changed(make_explorer):
+    e = make_explorer(map_n="6", basins_n="6", **PAPER_R08)
+    e.compute_research(MAP)
+    e.compute_research(BASINS)
+    m, b = e.research.views[MAP].figure.title, e.research.views[BASINS].figure.title
+    assert "settings changed" not in m.text + b.text
+    e.settings.param.update(omega=2.7, r=0.7)         # the map's own axes: still valid
+    assert "settings changed" not in m.text and "settings changed" in b.text
+    e.settings.c = 0.06
+    assert "settings changed" in m.text
+    e.compute_research(MAP)
+    assert "settings changed" not in m.text
