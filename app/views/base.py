@@ -35,7 +35,8 @@ class View:
 
     def present(self, presenter: bool) -> None:
         """Large type and thick lines for a projector (True), or the screen (False)."""
-        style(self.figure, presenter)
+        if self.figure is not None:         # a view may only draw into another's figure
+            style(self.figure, presenter)
 
     def link(self, views: dict) -> None:
         """Once every view of the page exists (``views`` by key): share a range with, or
