@@ -12,6 +12,7 @@ from __future__ import annotations
 import html
 
 import panel as pn
+from bokeh.layouts import column as bokeh_column
 import param
 
 from .panel_fixes import GRID_COLUMN_CSS, PromptFloatSlider
@@ -21,7 +22,7 @@ from .settings import ON_DIAGRAM, RESEARCH, SETTINGS
 SIDEBAR_WIDTH = 300
 STATUS_NAME = "bifurcation_status"
 STABILITY_NAME = "stability_readout"
-UNDER_HEIGHT = 140     # px of a strip drawn under a view in its cell (the Lyapunov strip)
+UNDER_HEIGHT = 110     # px of a strip drawn under a view in its cell (the Lyapunov strip)
 CAPTION = ("Paper defaults: m = 1, c = 0.05, k = 1, g = 0, r = 0.8, ω = 2. "
            "Pick a scene of the paper or move a slider.")
 CHANGED_NOTE = "\n\n*Settings changed since this scene was loaded.*"
@@ -265,11 +266,11 @@ class Controls:
         if not under:
             return pn.pane.Bokeh(view.root, sizing_mode="stretch_both", stylesheets=[CELL_CSS],
                                  css_classes=[f"ie-cell-{view.key}"])
-        return pn.Column(pn.pane.Bokeh(view.root, sizing_mode="stretch_both"),
-                         *(pn.pane.Bokeh(u.root, sizing_mode="stretch_width",
-                                         height=UNDER_HEIGHT) for u in under),
-                         sizing_mode="stretch_both", stylesheets=[CELL_CSS],
-                         css_classes=[f"ie-cell-{view.key}"])
+        for u in under:
+            u.root.sizing_mode, u.root.height = "stretch_width", UNDER_HEIGHT
+        root = bokeh_column(view.root, *(u.root for u in under), sizing_mode="stretch_both")
+        return pn.pane.Bokeh(root, sizing_mode="stretch_both", stylesheets=[CELL_CSS],
+                             css_classes=[f"ie-cell-{view.key}"])
 
     @staticmethod
     def _notes(views):
@@ -301,10 +302,9 @@ class Controls:
             self.compare_toggle, self.pin_toggle, self.png_button, self._notes(views),
             self.progress, self.diagram_status,
             sizing_mode="stretch_width", align_items="center", flex_wrap="wrap")
-        # a wide view (the Lyapunov strip) goes under the diagram, in the diagram's cell
-        under = [v for v in views if v.wide and v.figure is not None]
-        self.grid = pn.Column(*(self._cell(v, under if v.key == "bifurcation" else ())
-                                for v in views if not v.wide and v.figure is not None),
+        cells = [v for v in views if v.figure is not None and not v.under]
+        self.grid = pn.Column(*(self._cell(v, [u for u in views if u.under == v.key])
+                                for v in cells),
                               stylesheets=[GRID_COLUMN_CSS, GRID_CSS],
                               sizing_mode="stretch_both", css_classes=["ie-grid"])
         self.main = main = pn.Column(

@@ -13,8 +13,8 @@ from ._figure import style
 class View:
     #: Attribute of the session that holds this view (``session.displacement``).
     key = ""
-    #: Full page width below the diagram's progress row (else one cell of the grid).
-    wide = False
+    #: Key of the view this one is drawn under, in that view's cell ("": a cell of its own).
+    under = ""
     #: "What am I looking at": one or two sentences shown on request next to the view.
     note = ""
 

@@ -39,7 +39,6 @@ def tap_value(x: float, lo: float, hi: float, n: int) -> float:
 
 class BifurcationView(View):
     key = "bifurcation"
-    wide = True
 
     def __init__(self):
         self.source = ColumnDataSource(_empty())

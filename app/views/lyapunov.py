@@ -56,7 +56,7 @@ def strip_columns(values: np.ndarray, lam: np.ndarray, sweep: np.ndarray) -> tup
 
 class LyapunovView(View):
     key = "lyapunov"
-    wide = True
+    under = "bifurcation"
 
     def __init__(self):
         self.source = ColumnDataSource(_empty())
