@@ -29,7 +29,7 @@ from .jobs import Job, SessionLoop, session_doc
 from .panel_fixes import release_links
 from .research_panel import MAP, ResearchPanel
 from .scenes import BY_KEY
-from .settings import QUERY_NAMES, SYMBOLS, Settings
+from .settings import BY_NAME, QUERY_NAMES, SYMBOLS, Settings
 from .views import VIEWS
 from .views._figure import share_helpers
 from .views.compare import DIAGRAMS as COMPARE_DIAGRAMS
@@ -153,7 +153,7 @@ class Explorer(pn.viewable.Viewer):
 
     def request(self, **values) -> None:
         """Settings asked for by a view (a tap on the phase plane: x0, v0)."""
-        self.settings.param.update(**values)
+        self.pick(**values)
 
     def pin(self, on: bool) -> None:
         """Keep the maps shown now as a faint overlay (or drop it)."""
@@ -225,8 +225,11 @@ class Explorer(pn.viewable.Viewer):
         self._mark_caption()
 
     def pick(self, **values) -> None:
-        """Settings chosen by a gesture on a view (a tap on the diagram, the map...)."""
-        self.settings.param.update(**values)
+        """Settings chosen by a gesture on a view (a tap on the diagram, the map...),
+        rounded as a typed value is, so the widgets show what is computed."""
+        self.settings.param.update(**{
+            n: state.rounded(BY_NAME[n], v) if isinstance(v, float) else v
+            for n, v in values.items()})
 
     def _on_settings(self, *events) -> None:
         if not self._restoring:

@@ -164,8 +164,17 @@ def test_csv_files_start_with_the_settings_they_were_computed_with(make_explorer
                  e.downloads.bifurcation_csv):
         buf = make()
         got = csv_settings(buf)
-        assert list(got) == ["m", "c", "k", "g", "r", "omega", "psi", "t_end", "t_record",
-                             "method", "version"]
+        names = list(got)
+        assert names[:10] == ["m", "c", "k", "g", "r", "omega", "psi", "t_end", "t_record",
+                              "method"] and names[-1] == "version"
+        # the diagram adds its start and sweep and names the method it ran (exact)
+        extra = names[10:-1]
+        if make == e.downloads.bifurcation_csv:
+            assert {"x0", "v0", "bif_param", "bif_sweep", "bif_n"} <= set(extra)
+            assert got["method"] == "exact" and got["bif_param"] == "omega"
+            got["method"] = "rk45"       # the scene's method, checked below
+        else:
+            assert extra == []
         assert {n: float(got[n]) for n in ("m", "c", "k", "g", "r", "omega", "t_end",
                                            "t_record")} == {
             "m": 1.5, "c": 0.07, "k": 2.0, "g": 0.1, "r": 0.6, "omega": 2.81,
