@@ -22,7 +22,6 @@ from .settings import ON_DIAGRAM, RESEARCH, SETTINGS
 SIDEBAR_WIDTH = 300
 STATUS_NAME = "bifurcation_status"
 STABILITY_NAME = "stability_readout"
-UNDER_HEIGHT = 110     # px of a strip drawn under a view in its cell (the Lyapunov strip)
 CAPTION = ("Paper defaults: m = 1, c = 0.05, k = 1, g = 0, r = 0.8, ω = 2. "
            "Pick a scene of the paper or move a slider.")
 CHANGED_NOTE = "\n\n*Settings changed since this scene was loaded.*"
@@ -262,12 +261,11 @@ class Controls:
         return out
 
     def _cell(self, view, under=()):
-        """One view in the grid, with the views drawn under it (sharing its width)."""
+        """One view in the grid, with the views drawn under it (sharing its width; each
+        keeps its own height)."""
         if not under:
             return pn.pane.Bokeh(view.root, sizing_mode="stretch_both", stylesheets=[CELL_CSS],
                                  css_classes=[f"ie-cell-{view.key}"])
-        for u in under:
-            u.root.sizing_mode, u.root.height = "stretch_width", UNDER_HEIGHT
         root = bokeh_column(view.root, *(u.root for u in under), sizing_mode="stretch_both")
         return pn.pane.Bokeh(root, sizing_mode="stretch_both", stylesheets=[CELL_CSS],
                              css_classes=[f"ie-cell-{view.key}"])

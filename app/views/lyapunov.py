@@ -13,7 +13,6 @@ from __future__ import annotations
 import numpy as np
 from bokeh.models import ColumnDataSource, Grid, Range1d, Span
 
-from ..settings import AXIS_LABELS
 from ..state import Run
 from ._figure import LINE, WALL, make_figure, padded, set_range
 from .base import View
@@ -54,6 +53,10 @@ def strip_columns(values: np.ndarray, lam: np.ndarray, sweep: np.ndarray) -> tup
              "color": color.tolist(), "size": np.where(finite, 3.0, 7.0)}, (lo, hi))
 
 
+#: Height (px) of the strip under the diagram, on screen and in presenter mode.
+STRIP_HEIGHT = {False: 110, True: 140}
+
+
 class LyapunovView(View):
     key = "lyapunov"
     under = "bifurcation"
@@ -64,9 +67,10 @@ class LyapunovView(View):
         self.exponents: list[np.ndarray] = []
         self.sweeps: list[np.ndarray] = []
         self.figure = make_figure("lyapunov_figure", "Largest Lyapunov exponent λ₁",
-                                  "driving frequency ω (rad/s)", "λ₁ (1/s)", height=190,
+                                  None, "λ₁ (1/s)",
                                   y_range=Range1d(-MIN_SPAN, MIN_SPAN), tools="",
                                   toolbar_location=None)
+        # the x axis is labelled on the diagram right above
         # few Bokeh models per page: no tools (the x axis is the diagram's, zoomed there)
         # and no grid lines (the zero line is the one that matters)
         self.figure.center = [m for m in self.figure.center if not isinstance(m, Grid)]
@@ -75,6 +79,12 @@ class LyapunovView(View):
         self.figure.scatter("omega", "y", source=self.source, size="size", marker="marker",
                             color="color", name="lyapunov")
 
+    def present(self, presenter: bool) -> None:
+        """The strip keeps a fixed height under the diagram; large type needs more."""
+        super().present(presenter)
+        self.figure.sizing_mode = "stretch_width"
+        self.figure.height = STRIP_HEIGHT[presenter]
+
     def link(self, views: dict) -> None:
         """Share the diagram's x axis: zooming or panning one moves both."""
         self.figure.x_range = views["bifurcation"].figure.x_range
@@ -82,7 +92,6 @@ class LyapunovView(View):
     def diagram_started(self, run: Run) -> None:
         self.values, self.exponents, self.sweeps = [], [], []
         self.source.data = _empty()
-        self.figure.xaxis.axis_label = AXIS_LABELS[run.bif_param]
         self.figure.title.text = "Largest Lyapunov exponent λ₁ — computing"
 
     def diagram_chunk(self, part: dict) -> None:

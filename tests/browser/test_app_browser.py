@@ -246,33 +246,21 @@ def test_slider_to_repaint_latency(page, server):
     assert statistics.median(samples) < 500, samples   # target 150 ms; see app_figures.md
 
 
-<<<<<<< HEAD
-#: Bokeh models a page may hold at the paper defaults: the five views, controls and
-#: status of the session-cost work came to 171 (target 180); the Lyapunov strip under the
-#: diagram adds 12 and the stability readout with the branches box 9 (192 measured).
-MODEL_BUDGET = 200
+#: Bokeh models a page may hold at the paper defaults. The five views with their controls
+#: and status came to 171 after the session-cost work (target 180); the animation (a
+#: sixth figure with its player), cursors, sticking bands, hover tools and the header's
+#: presenter / compare / pin / PNG / notes controls add about 63; the Lyapunov strip under
+#: the diagram 12 and the stability readout with the branches box about 9: 253 measured.
+#: Compare mode, the accuracy panel, pin overlays and the research card are built on use.
+MODEL_BUDGET = 260
 
 
 def test_page_bokeh_models_within_budget(page, server):
-=======
-#: The five views and their page: 180 models. The classroom page adds the animation (a
-#: sixth figure with its player: ~30), cursors and sticking bands (~12), a hover tool per
-#: view (5), the header's presenter / compare / pin / PNG / sidebar controls and notes
-#: (~8); measured 234. Compare mode, the accuracy panel and pin overlays are built on use.
-MAX_MODELS = 240
-
-
-def test_page_has_at_most_240_bokeh_models(page, server):
->>>>>>> classroom
     """A count, not a timing: every model is built, serialised and sent per session
     (the sidebar's collapsed cards and the research card are built when opened)."""
     open_app(page, server)
     n = page.evaluate("Bokeh.documents[0].all_models.size")
-<<<<<<< HEAD
     assert n <= MODEL_BUDGET, n
-=======
-    assert n <= MAX_MODELS, n
->>>>>>> classroom
 
 
 def test_server_log_has_no_traceback(server):
