@@ -26,7 +26,7 @@ from . import accuracy, branches, compute, diagram, research, stability, state
 from .controls import Controls
 from .downloads import Downloads
 from .jobs import Job, SessionLoop, session_doc
-from .panel_fixes import release_links
+from .panel_fixes import release_links, repair_reconnect
 from .research_panel import MAP, ResearchPanel
 from .scenes import BY_KEY
 from .settings import BY_NAME, QUERY_NAMES, SYMBOLS, Settings
@@ -73,6 +73,8 @@ class Explorer(pn.viewable.Viewer):
             view.link({v.key: v for v in self.views})
             if view.ready is not None and doc is not None:
                 doc.js_on_event("document_ready", view.ready)
+        if doc is not None:
+            repair_reconnect(doc)
         share_helpers([v.figure for v in self.views if v.figure is not None])
         self.downloads = Downloads(self)
         self.controls = c = Controls(self.settings, self.views, on_scene=self.load_scene,

@@ -1,9 +1,10 @@
-"""Every workaround of a Panel behaviour the app depends on, for Panel ``PANEL_VERSION``.
+"""Every workaround of a Panel or Bokeh behaviour the app depends on, for Panel
+``PANEL_VERSION`` and Bokeh ``BOKEH_VERSION``.
 
-Each one names the upstream behaviour it works around. They reach into Panel's private
-parts, so they hold for one version only: ``check_version()`` (run by
-tests/app/test_panel_fixes.py) fails loudly when the installed Panel is another one;
-re-check each workaround against the new version before moving the pin.
+Each one names the upstream behaviour it works around. They reach into private parts,
+so they hold for one version only: ``check_version()`` (run by
+tests/app/test_panel_fixes.py) fails loudly when the installed Panel or Bokeh is
+another one; re-check each workaround against the new version before moving the pin.
 """
 from __future__ import annotations
 
@@ -11,20 +12,26 @@ import panel as pn
 
 #: The Panel release these workarounds were written for and checked against.
 PANEL_VERSION = "1.9.4"
+#: The Bokeh release the Bokeh workarounds were written for and checked against.
+BOKEH_VERSION = "3.9.2"
 
 
 class PanelVersionError(RuntimeError):
     pass
 
 
-def check_version(installed: str | None = None) -> None:
-    """Raise if the installed Panel is not the one the workarounds were written for."""
-    installed = installed or pn.__version__
-    if installed != PANEL_VERSION:
-        raise PanelVersionError(
-            f"app/panel_fixes.py was written for Panel {PANEL_VERSION}, found {installed}: "
-            "check every workaround in it against the new version, then update "
-            "PANEL_VERSION")
+def check_version(installed: str | None = None, bokeh: str | None = None) -> None:
+    """Raise if the installed Panel or Bokeh is not the one the workarounds were
+    written for."""
+    import bokeh as bk
+
+    for name, found, pinned in (("Panel", installed or pn.__version__, PANEL_VERSION),
+                                ("Bokeh", bokeh or bk.__version__, BOKEH_VERSION)):
+        if found != pinned:
+            raise PanelVersionError(
+                f"app/panel_fixes.py was written for {name} {pinned}, found {found}: "
+                "check every workaround in it against the new version, then update "
+                f"{name.upper()}_VERSION")
 
 
 # -- slider events (Panel 1.9.4) ----------------------------------------------------------
@@ -70,6 +77,59 @@ def deliver_stranded_writes() -> None:
 
     dispatch_msgs._impact_explorer = True
     pdoc._dispatch_msgs = dispatch_msgs
+
+
+# -- reconnecting to the same session (BokehJS 3.9.2) -------------------------------------
+
+#: Patches of BokehJS's ``ClientConnection``, run in the page once its document is ready.
+#: 1. The receiver that assembles multi-frame messages outlives a lost connection: a
+#:    link that drops in the middle of a message leaves it half-way, and every message
+#:    of the new connection is read out of phase ("First message was not an ACK", "No
+#:    msgid in header"). A fresh receiver per opened socket starts clean.
+#: 2. A reconnect pulls the document again and calls ``replace_with_json`` without the
+#:    reply's binary buffers, so any ColumnDataSource holding a numpy array fails with
+#:    "buffer for id=... not found" and the reconnect is abandoned (bokeh/bokeh#15347,
+#:    fixed upstream after 3.9.2). The repull below passes them. The document announced
+#:    "idle" once and never again, so Panel's Location (which writes the URL only after
+#:    idle) and the views' ready hooks would stay silent for the new models: the flag is
+#:    reset so that idle and ``document_ready`` come again once the new views are drawn.
+RECONNECT_JS = """
+if (!window.__ieReconnectFix) {
+  window.__ieReconnectFix = true
+  const {ClientConnection} = Bokeh.require("client/connection")
+  const {Receiver} = Bokeh.require("protocol/receiver")
+  const {Document} = Bokeh.require("document")
+  const proto = ClientConnection.prototype
+  const on_open = proto._on_open
+  proto._on_open = function (...args) {
+    this._receiver = new Receiver()
+    return on_open.apply(this, args)
+  }
+  const repull = proto._repull_session_doc
+  proto._repull_session_doc = async function (resolve, reject) {
+    if (this.session == null)
+      return repull.call(this, resolve, reject)
+    try {
+      const {doc_json, buffers} = await this._pull_doc_json()
+      const doc = this.session.document
+      doc._notified_idle = false
+      Document.from_json(doc_json, undefined, buffers).destructively_move(doc)
+      resolve(this.session)
+    } catch (e) {
+      console.error("reconnect: could not pull the document again", e)
+      reject(e instanceof Error ? e : `${e}`)
+    }
+  }
+}
+"""
+
+
+def repair_reconnect(doc) -> None:
+    """Install ``RECONNECT_JS`` in the page of ``doc`` when it is ready (see there).
+    tests/browser/test_reconnect.py cuts a page's connection mid-stream and needs it."""
+    from bokeh.models import CustomJS
+
+    doc.js_on_event("document_ready", CustomJS(code=RECONNECT_JS))
 
 
 # -- link registry leak (Panel 1.9.4) -----------------------------------------------------

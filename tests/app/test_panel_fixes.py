@@ -1,4 +1,6 @@
-"""The Panel workarounds hold for one Panel version: fail loudly when it changes."""
+"""The Panel and Bokeh workarounds hold for one version of each: fail loudly when it
+changes."""
+import bokeh
 import panel as pn
 import pytest
 
@@ -8,11 +10,14 @@ from app import panel_fixes
 def test_installed_panel_is_the_one_the_workarounds_were_written_for():
     panel_fixes.check_version()          # raises PanelVersionError naming both versions
     assert pn.__version__ == panel_fixes.PANEL_VERSION
+    assert bokeh.__version__ == panel_fixes.BOKEH_VERSION
 
 
 def test_a_different_panel_fails_loudly():
     with pytest.raises(panel_fixes.PanelVersionError, match="1.9.4.*1.10.0"):
         panel_fixes.check_version("1.10.0")
+    with pytest.raises(panel_fixes.PanelVersionError, match="Bokeh 3.9.2.*3.10.0"):
+        panel_fixes.check_version(bokeh="3.10.0")
 
 
 def test_the_private_parts_the_workarounds_touch_exist():
@@ -27,3 +32,20 @@ def test_the_private_parts_the_workarounds_touch_exist():
     assert hasattr(Callback, "registry")                 # release_links
     import panel as pn
     assert "scroll_button_threshold" in pn.Column.param      # GRID_COLUMN_CSS
+
+
+
+def test_the_bokehjs_parts_the_reconnect_fix_touches_exist():
+    """RECONNECT_JS patches BokehJS's ClientConnection by name; a BokehJS that renamed
+    them (or fixed the repull) fails here."""
+    from pathlib import Path
+
+    bokehjs = (Path(bokeh.__file__).parent / "server/static/js/bokeh.min.js").read_text()
+    for name in ("_on_open(", "_repull_session_doc(", "_pull_doc_json(", "_notified_idle",
+                 "destructively_move(", "this._receiver.consume("):
+        assert name in bokehjs, name
+    # the upstream bug itself: the repull replaces the document without its buffers
+    assert "this.session.document.replace_with_json(n)" in bokehjs
+    for name in ("client/connection", "protocol/receiver", "document"):
+        assert f'"{name}"' in panel_fixes.RECONNECT_JS
+

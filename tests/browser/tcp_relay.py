@@ -10,7 +10,9 @@ class Relay:
     """Forward 127.0.0.1:<port> to ``target`` (host, port), byte for byte.
 
     ``cut()`` closes every open connection (both ends see the TCP connection end) and
-    closes new ones at once until ``restore()``.
+    closes new ones at once until ``restore()``. ``cut_mid_message()`` arms a cut that
+    happens inside the server's next websocket message: its first frame reaches the
+    browser, the rest never does.
     """
 
     def __init__(self, target: tuple[str, int]):
@@ -22,6 +24,8 @@ class Relay:
         self._down = False
         self.accepted = 0
         self.refused = 0
+        self._armed = False
+        self.cut_after = None             # the first frame forwarded before an armed cut
         threading.Thread(target=self._accept, daemon=True, name="relay-accept").start()
 
     def _accept(self) -> None:
@@ -44,13 +48,27 @@ class Relay:
                 continue
             with self._lock:
                 self._open += [client, upstream]
-            for a, b in ((client, upstream), (upstream, client)):
-                threading.Thread(target=self._pump, args=(a, b), daemon=True).start()
+            threading.Thread(target=self._pump, args=(client, upstream), daemon=True).start()
+            threading.Thread(target=self._pump, args=(upstream, client, _Frames()),
+                             daemon=True).start()
 
-    @staticmethod
-    def _pump(src: socket.socket, dst: socket.socket) -> None:
+    def cut_mid_message(self) -> None:
+        self._armed = True
+
+    def _pump(self, src: socket.socket, dst: socket.socket, frames=None) -> None:
         try:
             while data := src.recv(65536):
+                if frames is not None:
+                    frames.feed(data)
+                    if self._armed and frames.message_start is not None:
+                        # one frame of a message, then the link goes
+                        keep = frames.message_start_end - (frames.seen - len(data))
+                        if 0 < keep <= len(data):
+                            dst.sendall(data[:keep])
+                            self._armed = False
+                            self.cut_after = frames.message_start
+                            self.cut()
+                            return
                 dst.sendall(data)
         except OSError:
             pass
@@ -78,3 +96,48 @@ class Relay:
     def close(self) -> None:
         self.cut()
         self.listener.close()
+
+
+class _Frames:
+    """Frame boundaries of a server's websocket stream (RFC 6455; server frames are not
+    masked), after the HTTP upgrade response. ``message_start`` is the first frame of
+    the latest Bokeh message (a text frame holding its header) and ``message_start_end``
+    its end as a byte offset in the stream; ``seen`` counts the bytes fed."""
+
+    def __init__(self):
+        self.buf = b""
+        self.seen = 0
+        self.offset = None                # stream offset of ``buf[0]`` once in frames
+        self.message_start = None
+        self.message_start_end = None
+
+    def feed(self, data: bytes) -> None:
+        self.seen += len(data)
+        self.buf += data
+        if self.offset is None:
+            end = self.buf.find(b"\r\n\r\n")
+            if end < 0:
+                return
+            if not self.buf.startswith(b"HTTP/1.1 101"):
+                self.buf, self.offset = b"", float("inf")     # plain HTTP: no frames
+                return
+            self.offset = self.seen - len(self.buf) + end + 4
+            self.buf = self.buf[end + 4:]
+        while len(self.buf) >= 2 and self.offset != float("inf"):
+            n, head = self.buf[1] & 0x7F, 2
+            if n == 126:
+                if len(self.buf) < 4:
+                    return
+                n, head = int.from_bytes(self.buf[2:4], "big"), 4
+            elif n == 127:
+                if len(self.buf) < 10:
+                    return
+                n, head = int.from_bytes(self.buf[2:10], "big"), 10
+            if len(self.buf) < head + n:
+                return
+            payload = self.buf[head:head + n]
+            if self.buf[0] & 0x0F == 1 and payload.startswith(b'{"msgid"'):
+                self.message_start = payload[:80]
+                self.message_start_end = self.offset + head + n
+            self.offset += head + n
+            self.buf = self.buf[head + n:]

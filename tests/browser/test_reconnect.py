@@ -1,7 +1,8 @@
 """Classroom Wi-Fi: the page's websocket is cut and restored; the page recovers by itself.
 
 Chromium loads the app through a loopback TCP relay (tcp_relay.Relay). After a setting
-is changed in the page, the relay drops every connection and refuses new ones for a few
+is changed in the page, the relay drops every connection in the middle of a server
+message (the worst moment: the browser holds part of it) and refuses new ones for a few
 seconds, then lets them through again. Panel's reconnect (``pn.extension(reconnect=True)``
 in app/app.py) must bring the same page back to the same server session: no reload (a
 marker on ``window`` and the Bokeh document object survive), the changed setting is
@@ -84,26 +85,42 @@ def test_page_recovers_after_the_websocket_is_cut_and_keeps_its_settings(page, r
                            timeout=30_000)
     page.evaluate("() => { window.__ieNoReload = true; window.__ieDoc = Bokeh.documents[0]; }")
     disp = page.evaluate("ie.data('displacement').x.length + ':' + ie.sum('displacement', 'x')")
-    accepted = relayed.accepted
+    # BokehJS announces a finished reconnect (socket open, session acknowledged, document
+    # pulled again) with a document event; a key pressed before that goes nowhere
+    page.evaluate("() => { window.__ieReconnected = 0; Bokeh.documents[0].on_event("
+                  "'client_reconnected', () => { window.__ieReconnected += 1 }) }")
 
-    relayed.cut()                         # Wi-Fi gone: open sockets dropped, new ones refused
-    time.sleep(4.0)
-    assert relayed.refused >= 1, "the page did not try to reconnect while the link was down"
-    relayed.restore()
-    deadline = time.monotonic() + 40      # Panel retries after 1, 2, 4, 8 ... s
-    while relayed.accepted == accepted and time.monotonic() < deadline:
-        time.sleep(0.2)
-    assert relayed.accepted > accepted, "the page never reconnected"
-
-    # a slider moved after the outage reaches the server and comes back as new views
+    # Wi-Fi gone in the middle of the server's answer to a slider move (omega 2.00 ->
+    # 2.01): the browser has part of a message; open sockets dropped, new ones refused
+    relayed.cut_mid_message()
     omega = handle(page, "omega")
     omega.focus()
-    for _ in range(5):
+    omega.press("ArrowRight")
+    deadline = time.monotonic() + 30
+    while relayed.cut_after is None and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert relayed.cut_after is not None, "the server sent no message to cut"
+    time.sleep(4.0)
+    assert relayed.refused >= 1, "the page did not try to reconnect while the link was down"
+    assert page.evaluate("window.__ieReconnected") == 0
+    relayed.restore()
+    try:                                  # BokehJS retries after 1, 2, 4, 8 ... s
+        page.wait_for_function("() => window.__ieReconnected > 0", timeout=60_000, polling=200)
+    except Exception:
+        raise AssertionError(f"the page never reconnected (cut after {relayed.cut_after!r}); "
+                             f"server log:\n{relayed.log.read_text()[-3000:]}") from None
+
+    # more moves after the outage reach the server and come back as new views
+    for _ in range(4):
         omega.press("ArrowRight")
-    page.wait_for_function(
-        "() => Math.abs(ie.model('bifurcation_marker').location - 2.05) < 1e-9 && "
-        f"ie.data('displacement').x.length + ':' + ie.sum('displacement', 'x') !== {disp!r}",
-        timeout=30_000)
+    try:
+        page.wait_for_function(
+            "() => Math.abs(ie.model('bifurcation_marker').location - 2.05) < 1e-9 && "
+            f"ie.data('displacement').x.length + ':' + ie.sum('displacement', 'x') !== {disp!r}",
+            timeout=30_000)
+    except Exception:
+        raise AssertionError(f"no update after the reconnect: {page.evaluate(STATE)}\n"
+                             f"server log:\n{relayed.log.read_text()[-3000:]}") from None
     assert page.evaluate("() => window.__ieNoReload === true && "
                          "Bokeh.documents[0] === window.__ieDoc"), "the page was reloaded"
     # the session is the same one: the r set before the outage still holds there
