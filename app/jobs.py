@@ -36,20 +36,34 @@ def session_doc():
 class SessionLoop:
     """``loop(fn)`` runs ``fn`` on the session's event loop (safe from any thread),
     holding the document so that all its model changes go out in one message; without
-    a server (``doc`` None) it runs ``fn`` at once.
+    a server (``doc`` None) it runs ``fn`` at once. Functions run in the order they
+    were sent.
 
     Nothing runs before ``ready()`` (call it from ``pn.state.onload``): Panel 1.9.4
     drops model changes made between the page's document pull and its "document ready"
     (``panel.io.document.hold`` discards them while the session is not connected,
     counting on the full document it serves), so a result applied in that gap would
     never reach the page. Until then, functions wait in order and run at ``ready()``.
+
+    The order is kept here, not left to Bokeh: ``doc.add_next_tick_callback`` called
+    from a worker thread while the loop thread holds the document has its
+    "callback added" event collected by the hold, and Panel 1.9.4 re-queues collected
+    events behind ones that arrived meanwhile, so a diagram's last progress line could
+    run after its "complete" one. Workers therefore only wake the loop thread (tornado's
+    ``add_callback``, thread-safe and in order); the loop thread asks Bokeh for a
+    next-tick callback, which runs every function queued so far, oldest first.
     """
 
     def __init__(self, doc):
         self.doc = doc
         self._ready = doc is None
         self._waiting: list[Callable[[], None]] = []
+        self._queue: list[Callable[[], None]] = []
         self._lock = threading.Lock()
+        self._io_loop = None
+        if doc is not None:
+            from tornado.ioloop import IOLoop
+            self._io_loop = IOLoop.current()
 
     def __call__(self, fn: Callable[[], None]) -> None:
         if self.doc is None:
@@ -59,7 +73,8 @@ class SessionLoop:
             if not self._ready:
                 self._waiting.append(fn)
                 return
-        self.doc.add_next_tick_callback(lambda: self._run([fn]))
+            self._queue.append(fn)
+        self._io_loop.add_callback(self._wake)
 
     def ready(self) -> None:
         """The page is up: run what waited, and from now on run at the next tick."""
@@ -72,13 +87,29 @@ class SessionLoop:
         """The session is gone: forget what waits."""
         with self._lock:
             self._waiting.clear()
+            self._queue.clear()
+
+    def _wake(self) -> None:
+        try:
+            self.doc.add_next_tick_callback(self._drain)
+        except Exception as exc:      # the session was destroyed meanwhile
+            log.info("session loop: nothing run: %s", exc)
+
+    def _drain(self) -> None:
+        with self._lock:
+            fns, self._queue = self._queue, []
+        self._run(fns)
 
     def _run(self, fns) -> None:
         if not fns:
             return
         with set_curdoc(self.doc), pn.io.hold(self.doc):
             for fn in fns:
-                fn()
+                try:
+                    fn()
+                except Exception as exc:    # one failed update must not drop the others
+                    log.warning("a session update failed: %s: %s", type(exc).__name__,
+                                str(exc)[:300])
 
 
 class Ticket:
