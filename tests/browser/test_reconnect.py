@@ -87,11 +87,26 @@ def test_page_recovers_after_the_websocket_is_cut_and_keeps_its_settings(page, r
     disp = page.evaluate("ie.data('displacement').x.length + ':' + ie.sum('displacement', 'x')")
     # BokehJS announces a finished reconnect (socket open, session acknowledged, document
     # pulled again) with a document event; a key pressed before that goes nowhere
-    page.evaluate("() => { window.__ieReconnected = 0; Bokeh.documents[0].on_event("
-                  "'client_reconnected', () => { window.__ieReconnected += 1 }) }")
+    page.evaluate("() => { window.__ieReconnected = 0; window.__ieReady = 0; "
+                  "const doc = Bokeh.documents[0]; "
+                  "doc.on_event('client_reconnected', () => { window.__ieReconnected += 1 }); "
+                  "doc.on_event('document_ready', () => { window.__ieReady += 1 }) }")
+    console = []
+    page.on("console", lambda m: console.append(f"{m.type}: {m.text}"))
 
     # Wi-Fi gone in the middle of the server's answer to a slider move (omega 2.00 ->
     # 2.01): the browser has part of a message; open sockets dropped, new ones refused
+    def diagnose() -> str:
+        state = page.evaluate(STATE)
+        marker = page.evaluate("ie.model('bifurcation_marker').location")
+        return (f"{state}; marker at {marker}; page query {page.evaluate('location.search')}\n"
+                f"console:\n" + "\n".join(console[-30:]) +
+                f"\nserver log:\n{relayed.log.read_text()[-3000:]}")
+
+    # the page and server settle first (URL, status lines), so that the message cut is the
+    # server's answer to the key press below and the key's own message has arrived
+    page.wait_for_function("() => location.search.includes('r=0.77')", timeout=10_000)
+    relayed.wait_quiet(1.5)
     relayed.cut_mid_message()
     omega = handle(page, "omega")
     omega.focus()
@@ -109,6 +124,13 @@ def test_page_recovers_after_the_websocket_is_cut_and_keeps_its_settings(page, r
     except Exception:
         raise AssertionError(f"the page never reconnected (cut after {relayed.cut_after!r}); "
                              f"server log:\n{relayed.log.read_text()[-3000:]}") from None
+    # the reconnect pulls the document again and redraws every view from it; keys
+    # pressed into the old widgets while that happens are lost, as they would be for a
+    # person, so the test waits for the redrawn page to announce itself ready
+    try:
+        page.wait_for_function("() => window.__ieReady > 0", timeout=30_000, polling=100)
+    except Exception:
+        raise AssertionError(f"the page was not redrawn after the reconnect: {diagnose()}") from None
 
     # more moves after the outage reach the server and come back as new views
     for _ in range(4):
@@ -119,8 +141,7 @@ def test_page_recovers_after_the_websocket_is_cut_and_keeps_its_settings(page, r
             f"ie.data('displacement').x.length + ':' + ie.sum('displacement', 'x') !== {disp!r}",
             timeout=30_000)
     except Exception:
-        raise AssertionError(f"no update after the reconnect: {page.evaluate(STATE)}\n"
-                             f"server log:\n{relayed.log.read_text()[-3000:]}") from None
+        raise AssertionError(f"no update after the reconnect: {diagnose()}") from None
     assert page.evaluate("() => window.__ieNoReload === true && "
                          "Bokeh.documents[0] === window.__ieDoc"), "the page was reloaded"
     # the session is the same one: the r set before the outage still holds there
