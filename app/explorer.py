@@ -11,6 +11,8 @@ A settings change is validated into a ``Run``; what it changes decides the work:
 
 Each job is an ``app.jobs.Job`` (latest request wins, work off the event loop, results
 back on it); each view gets the results it shows through its hooks (app.views.base).
+The diagram and its branch overlay (``app.session_diagram``), compare mode
+(``app.compare_mode``) and the research card (``app.research_panel``) own their jobs.
 Bad settings show a message naming the fields and keep the last good scene; nothing
 raises into Panel (no traceback in the server log).
 """
@@ -22,19 +24,18 @@ from concurrent.futures import ThreadPoolExecutor
 
 import panel as pn
 
-from . import accuracy, branches, compute, diagram, research, stability, state
+from . import accuracy, compute, stability, state
+from .compare_mode import CompareMode
 from .controls import Controls
 from .downloads import Downloads
 from .jobs import Job, SessionLoop, session_doc
 from .panel_fixes import release_links, repair_reconnect
-from .research_panel import MAP, ResearchPanel
+from .research_panel import ResearchPanel
 from .scenes import BY_KEY
-from .settings import BY_NAME, QUERY_NAMES, SYMBOLS, Settings
+from .session_diagram import SessionDiagram
+from .settings import BY_NAME, QUERY_NAMES, Settings
 from .views import VIEWS
 from .views._figure import share_helpers
-from .views.compare import DIAGRAMS as COMPARE_DIAGRAMS
-from .views.compare import SECTIONS as COMPARE_SECTIONS
-from .views.compare import CompareView
 
 log = logging.getLogger(__name__)
 
@@ -86,7 +87,8 @@ class Explorer(pn.viewable.Viewer):
                              pool=pool, on_result=self._scene_done, show_stale=True)
         self.window_job = Job("window", lambda req, t: compute.window_columns(*req), dispatch,
                               pool=pool, on_result=self._window_done)
-        self.runner = Job("diagram", self._follow_diagram, dispatch)
+        self.diagram = SessionDiagram(self.views, self.controls, dispatch,
+                                      None if doc is None else _BRANCH_POOL)
         self.accuracy_job = Job(
             "accuracy", lambda run, t: accuracy.to_html(accuracy.compare_methods(run)),
             dispatch, pool=None if doc is None else _ACCURACY_POOL,
@@ -95,22 +97,13 @@ class Explorer(pn.viewable.Viewer):
         self.stability_job = Job("stability", lambda run, t: stability.readout(run), dispatch,
                                  pool=None if doc is None else _STABILITY_POOL,
                                  on_result=self._stability_done)
-        self._parts: list[dict] = []      # the diagram's chunks so far (branch seeds)
-        self._diagram_end = None          # "complete", "partial (time limit)", "failed"
-        self.branch_job = Job("branches",
-                              lambda req, t: branches.branches_for(req[0], req[1], t),
-                              dispatch, pool=None if doc is None else _BRANCH_POOL,
-                              on_result=self._branches_done)
         # one heavy job per session: the regime map or the basins, the newest request wins
-        self.research_job = Job("research", self._research_work, dispatch,
-                                pool=None if doc is None else _RESEARCH_POOL)
-        self.research = ResearchPanel(self.widgets, compute=self.compute_research,
-                                      cancel=self.cancel_research, pick=self.pick,
-                                      downloads=self.downloads)
+        self.research = ResearchPanel(self.widgets, dispatch=dispatch,
+                                      pool=None if doc is None else _RESEARCH_POOL,
+                                      current=lambda: (self._wanted, self.scene),
+                                      pick=self.pick, downloads=self.downloads)
         self.controls.add_research(self.research.card)
-        self.compare = None                 # CompareView, built when first opened
-        self.compare_jobs: list[Job] = []
-        self._dispatch = dispatch
+        self.compare = CompareMode(dispatch, pool)
         c.compare_toggle.param.watch(lambda e: self.show_compare(e.new), "value")
         c.pin_toggle.param.watch(lambda e: self.pin(e.new), "value")
         self.settings.param.watch(self._on_settings, [n for n in QUERY_NAMES
@@ -142,9 +135,11 @@ class Explorer(pn.viewable.Viewer):
 
     def _on_session_destroyed(self, session_context) -> None:
         """The tab is gone: stop its jobs and let the whole session be collected."""
-        for job in (self.scene_job, self.window_job, self.runner, self.accuracy_job,
-                    self.stability_job, self.branch_job, self.research_job, *self.compare_jobs):
+        for job in (self.scene_job, self.window_job, self.accuracy_job, self.stability_job,
+                    self.research.job):
             job.cancel()
+        self.diagram.cancel()
+        self.compare.cancel()
         self._loop.close()
         self.release_links()
 
@@ -164,46 +159,11 @@ class Explorer(pn.viewable.Viewer):
                 view.pin(on)
 
     def show_compare(self, visible: bool) -> None:
-        """Open (building it the first time) or close compare mode. Its panels come from
-        the shared caches: the Fig. 3 diagrams from app.diagram's, the Fig. 7 sections
-        from app.compute's."""
-        if visible and self.compare is None:
-            self.compare = CompareView()
-            self.compare.present(self.settings.presenter)
-            pool = None if self._doc is None else _SCENE_POOL
-            runs = {k: state.validate({**state.defaults(), **BY_KEY[k].settings()})
-                    for k in (*COMPARE_DIAGRAMS, *COMPARE_SECTIONS)}
-            sections = Job("compare-sections",
-                           lambda rs, t: {k: compute.section_columns(r) for k, r in rs.items()},
-                           self._dispatch, pool=pool,
-                           on_result=lambda rs, result: self._compare_sections(result))
-            self.compare_jobs.append(sections)
-            for key in COMPARE_DIAGRAMS:
-                job = Job(f"compare-{key}", self._compare_follower(key), self._dispatch)
-                self.compare_jobs.append(job)
-                job.submit(runs[key])
-            sections.submit({k: runs[k] for k in COMPARE_SECTIONS})
-        if self.compare is not None:
-            self.controls.show_compare(self.compare.root, visible)
-
-    def _compare_follower(self, key: str):
-        view = self.compare
-
-        def done(info):
-            view.diagram_finished(key, "complete" if info["done"] >= info["total"]
-                                  else "partial (time limit)")
-
-        def work(run, ticket):
-            view.diagram_started(key)
-            diagram.follow(run, ticket, lambda part, d, n: view.diagram_chunk(key, part), done,
-                           lambda text: view.diagram_finished(key, "failed"))
-        return work
-
-    def _compare_sections(self, result) -> None:
-        if isinstance(result, Exception):
-            log.warning("compare sections failed: %s: %s", type(result).__name__, result)
-            return
-        self.compare.show_sections(result)
+        """Open (building it the first time) or close compare mode."""
+        if visible:
+            self.compare.open(self.settings.presenter)
+        if self.compare.view is not None:
+            self.controls.show_compare(self.compare.view.root, visible)
 
     def _on_display(self, *events) -> None:
         """Presenter mode on or off: type sizes and line widths of every view."""
@@ -212,8 +172,7 @@ class Explorer(pn.viewable.Viewer):
                 view.present(self.settings.presenter)
             if events or self.settings.presenter:   # a projector: plots take the width
                 self.controls.sidebar_toggle.value = not self.settings.presenter
-            if self.compare is not None:
-                self.compare.present(self.settings.presenter)
+            self.compare.present(self.settings.presenter)
             if events:
                 self._write_url()
 
@@ -257,14 +216,14 @@ class Explorer(pn.viewable.Viewer):
             self._message(f"Not applied — {exc}. Showing the last valid settings.")
             return
         if self._wanted is None or run.diagram_key() != self._wanted.diagram_key():
-            self._restart_diagram(run)
+            self.diagram.restart(run, start=self._loaded)
         if self._wanted is None or (stability.readout_key(run)
                                     != stability.readout_key(self._wanted)):
             self.controls.show_stability(None)
             self.stability_job.submit(run)
         previous, self._wanted = self._wanted, run
         if previous is None or run.branches != previous.branches:
-            self._update_branches()
+            self.diagram.show_branches(run.branches)
         self.scene_job.submit(run)
 
     def _on_load(self) -> None:
@@ -272,84 +231,8 @@ class Explorer(pn.viewable.Viewer):
         self._loop.ready()
         with pn.io.hold(self._doc):
             self._loaded = True
-            self._restart_diagram(self._wanted)
+            self.diagram.restart(self._wanted, start=True)
             self._write_url()
-
-    def _restart_diagram(self, run) -> None:
-        self._diagram_run, self._drawn, self._recorded = run, 0, 0
-        self._parts, self._diagram_end = [], None
-        if run.branches:
-            self.branch_job.cancel()
-            for view in self.views:
-                view.show_branches("waiting for the diagram")
-        for view in self.views:
-            view.diagram_started(run)
-        self.controls.show_diagram(f"computing {diagram.what(run)}…", 0)
-        if self._loaded:
-            self.runner.submit(run)
-
-    def _update_branches(self) -> None:
-        """Branch overlay: off, waiting for the diagram, or computed from its chunks."""
-        run = self._wanted
-        if not run.branches:
-            self.branch_job.cancel()
-            for view in self.views:
-                view.show_branches(None)
-            return
-        ready = self._diagram_end not in (None, "failed") and self._parts
-        text = ("continuing the orbits the diagram found…" if ready else
-                "waiting for the diagram" if self._diagram_end is None else
-                "no diagram to start from")
-        for view in self.views:
-            view.show_branches(text)
-        if ready:
-            self.branch_job.submit((self._diagram_run, diagram.merged(self._parts)))
-
-    def _follow_diagram(self, run, ticket) -> None:
-        diagram.follow(run, ticket, self._on_chunk, self._on_done, self._on_diagram_error)
-
-    def compute_research(self, kind: str) -> None:
-        """Compute the regime map (``MAP``) or the basins (``BASINS``) of the current
-        settings; supersedes the one under way."""
-        run = self._wanted
-        if run is None:
-            return
-        if not self.research.built:
-            self.research.build()
-        if kind == MAP:
-            request = research.map_request(run)
-        else:
-            shown = self.scene.trajectory if self.scene is not None and \
-                self.scene.run.params == run.params else None
-            request = research.BasinsRequest(run, *research.basins_window(run, shown),
-                                             run.basins_n)
-        self.research.started(kind, request)
-        self.research_job.submit((kind, request))
-
-    def cancel_research(self) -> None:
-        self.research_job.cancel()
-        self.research.cancelled()
-
-    def _research_work(self, job, ticket) -> None:
-        """Stream the blocks of a regime map or basins picture to the research panel."""
-        kind, request = job
-        block = None
-        try:
-            blocks = (research.map_rows(request) if kind == MAP
-                      else research.basins_rows(request))
-            try:
-                for block in blocks:
-                    ticket.send(self.research.rows, kind, block)
-                    if not ticket.live:       # before the next block is computed
-                        break
-            finally:
-                blocks.close()
-        except Exception as exc:     # a message on the view, one log line, no traceback
-            log.warning("%s failed: %s: %s", kind, type(exc).__name__, exc)
-            ticket.send(self.research.failed, kind, f"{type(exc).__name__}: {exc}")
-        else:
-            ticket.send(self.research.finished, kind, block)
-        ticket.finish()
 
     def _request_window(self, run, start, end, pixels) -> None:
         """A view wants the time series of [start, end] of ``run`` (a zoom, a pan)."""
@@ -398,32 +281,6 @@ class Explorer(pn.viewable.Viewer):
         self._mark_caption()
         self._write_url()
 
-    def _on_chunk(self, part: dict, done: int, total: int) -> None:
-        self._parts.append(part)
-        self._drawn += len(part["drawn"])
-        self._recorded += len(part["omega"])
-        for view in self.views:
-            view.diagram_chunk(part)
-        self.controls.show_diagram(f"computing… {done}/{total} "
-                                   f"{SYMBOLS[self._diagram_run.bif_param]} values", done, total)
-
-    def _on_done(self, info: dict) -> None:
-        text, end = diagram.status_text(self._diagram_run, info, self._recorded, self._drawn)
-        self.controls.show_diagram(text, info["done"], info["total"])
-        for view in self.views:
-            view.diagram_finished(end)
-        self._diagram_end = end
-        if self._wanted.branches:
-            self._update_branches()
-
-    def _on_diagram_error(self, text: str) -> None:
-        self.controls.show_diagram(f"diagram failed: {text}")
-        for view in self.views:
-            view.diagram_finished("failed")
-        self._diagram_end = "failed"
-        if self._wanted.branches:
-            self._update_branches()
-
     def _accuracy_done(self, run, result) -> None:
         if isinstance(result, Exception):
             result = f"accuracy failed: {type(result).__name__}: {result}"
@@ -435,13 +292,6 @@ class Explorer(pn.viewable.Viewer):
             result = stability.Readout("failed", f"no readout: {type(result).__name__}")
         self.readout = result
         self.controls.show_stability(stability.to_html(result))
-
-    def _branches_done(self, request, result) -> None:
-        if isinstance(result, Exception):     # never raise into Panel
-            log.warning("branches failed: %s: %s", type(result).__name__, result)
-            result = f"failed: {type(result).__name__}: {result}"
-        for view in self.views:
-            view.show_branches(result)
 
     def _mark_caption(self) -> None:
         if self._scene_run is not None and self.run is not None:

@@ -5,12 +5,13 @@ beyond the card itself), so the six main figures keep their place and the page s
 light. Opening it builds both tabs' contents and computes the open tab's picture;
 switching to the other tab computes that one if it is not there yet. The buttons
 recompute for the current settings; "Cancel" stops the computation (rows so far stay).
-The session (app.explorer) runs the work in its one research job and sends the row
-blocks here; nothing here computes.
+One research job per session runs the work (``app.research``) off the event loop and
+streams its row blocks back here; a new request supersedes the one under way.
 """
 from __future__ import annotations
 
 import dataclasses
+import logging
 import time
 
 import panel as pn
@@ -18,18 +19,23 @@ import panel as pn
 from . import research
 
 from .controls import NamedHTML
+from .jobs import Job
+
+log = logging.getLogger(__name__)
 
 MAP, BASINS = "map", "basins"
 TITLE = "Research: regime map and basins of attraction"
 
 
 class ResearchPanel:
-    """``compute(kind)`` asks the session for a picture (kind MAP or BASINS);
-    ``cancel()`` stops it; ``pick(**settings)`` is what taps on the views do."""
+    """``current()`` gives the session's latest valid settings and the scene shown
+    (``(run, scene)``); ``pick(**settings)`` is what taps on the views do; ``dispatch``
+    and ``pool`` are the session's loop and the executor the job runs in."""
 
-    def __init__(self, widgets: dict, *, compute, cancel, pick, downloads):
-        self._widgets, self._compute, self._cancel, self._pick = widgets, compute, cancel, pick
+    def __init__(self, widgets: dict, *, dispatch, pool, current, pick, downloads):
+        self._widgets, self._current, self._pick = widgets, current, pick
         self._downloads = downloads
+        self.job = Job("research", self._work, dispatch, pool=pool)
         self.views: dict = {}               # kind -> view, once built
         self.running: str | None = None     # kind being computed
         self._keys: dict = {}               # kind -> key of the request shown
@@ -68,9 +74,9 @@ class ResearchPanel:
             view = self.views[kind]
             button = pn.widgets.Button(label=label, color="primary", width=170,
                                        css_classes=[f"ie-{kind}-compute"])
-            button.on_click(lambda event, k=kind: self._compute(k))
+            button.on_click(lambda event, k=kind: self.compute(k))
             stop = pn.widgets.Button(label="Cancel", width=80, css_classes=[f"ie-{kind}-cancel"])
-            stop.on_click(lambda event: self._cancel())
+            stop.on_click(lambda event: self.cancel())
             self.buttons[kind] = button
             save = pn.widgets.FileDownload(
                 callback=lambda v=view: getattr(self._downloads, f"{v.key}_csv")(v),
@@ -104,7 +110,52 @@ class ResearchPanel:
         """A tab is shown: compute its picture unless it is there or under way."""
         kind = (MAP, BASINS)[index]
         if kind not in self._keys and self.running != kind:
-            self._compute(kind)
+            self.compute(kind)
+
+    # -- the work ---------------------------------------------------------------------------
+
+    def compute(self, kind: str) -> None:
+        """Compute the regime map (``MAP``) or the basins (``BASINS``) of the current
+        settings; supersedes the one under way."""
+        run, scene = self._current()
+        if run is None:
+            return
+        if not self.built:
+            self.build()
+        if kind == MAP:
+            request = research.map_request(run)
+        else:
+            shown = scene.trajectory if scene is not None and scene.run.params == run.params \
+                else None
+            request = research.BasinsRequest(run, *research.basins_window(run, shown),
+                                             run.basins_n)
+        self.started(kind, request)
+        self.job.submit((kind, request))
+
+    def cancel(self) -> None:
+        self.job.cancel()
+        self.cancelled()
+
+    def _work(self, job, ticket) -> None:
+        """Stream the blocks of a regime map or basins picture to this panel."""
+        kind, request = job
+        block = None
+        try:
+            blocks = (research.map_rows(request) if kind == MAP
+                      else research.basins_rows(request))
+            try:
+                for block in blocks:
+                    ticket.send(self.rows, kind, block)
+                    if not ticket.live:       # before the next block is computed
+                        break
+            finally:
+                blocks.close()
+        except Exception as exc:     # a message on the view, one log line, no traceback
+            log.warning("%s failed: %s: %s", kind, type(exc).__name__, exc)
+            ticket.send(self.failed, kind, f"{type(exc).__name__}: {exc}")
+        else:
+            ticket.send(self.finished, kind, block)
+        ticket.finish()
 
     # -- what the session shows -------------------------------------------------------------
 

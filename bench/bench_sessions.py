@@ -60,7 +60,7 @@ def one_session(prof=None) -> dict:
     marks.append(time.process_time())
     payload = len(json.dumps(doc.to_json(), default=str))
     marks.append(time.process_time())
-    assert e.runner.done.wait(120), "diagram did not finish"
+    assert e.diagram.job.done.wait(120), "diagram did not finish"
     empty = [v for v, c in VIEWS.items() if len(getattr(e, v).source.data[c]) == 0]
     assert not empty, empty
     models = len(doc.models)

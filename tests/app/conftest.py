@@ -21,9 +21,9 @@ def make_explorer():
     def make(**args):
         e = Explorer(args={**SMALL, **args})
         made.append(e)
-        assert e.runner.done.wait(60), "diagram did not finish"
+        assert e.diagram.job.done.wait(60), "diagram did not finish"
         return e
 
     yield make
     for e in made:
-        e.runner.cancel()
+        e.diagram.job.cancel()

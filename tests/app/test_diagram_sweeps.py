@@ -63,20 +63,20 @@ def test_diagram_in_g_agrees_with_single_runs(make_explorer):
 
 def test_swept_parameter_moves_the_marker_and_omega_restarts(make_explorer):
     e = make_explorer(bif_param="r", bif_n="9", **OWN_RANGE)
-    gen, data = e.runner.generation, e.bifurcation.source.data["omega"]
+    gen, data = e.diagram.job.generation, e.bifurcation.source.data["omega"]
     e.settings.r = 0.6
-    assert e.runner.generation == gen and e.bifurcation.source.data["omega"] is data
+    assert e.diagram.job.generation == gen and e.bifurcation.source.data["omega"] is data
     assert e.bifurcation.marker.location == 0.6
     e.settings.omega = 2.5
-    assert e.runner.generation == gen + 1
-    assert e.runner.done.wait(60)
+    assert e.diagram.job.generation == gen + 1
+    assert e.diagram.job.done.wait(60)
     assert "ω = 2.5" in e.bifurcation.figure.title.text
 
 
 def test_switching_the_parameter_takes_its_range(make_explorer):
     e = make_explorer()
     e.settings.bif_param = "c"
-    assert e.runner.done.wait(60)
+    assert e.diagram.job.done.wait(60)
     assert (e.settings.bif_min, e.settings.bif_max) == (None, None)
     run = e.bifurcation.run
     assert (run.bif_param, run.bif_min, run.bif_max) == ("c", 0.0, 0.5)
@@ -169,7 +169,7 @@ def test_tap_sets_the_swept_parameter(make_explorer):
     assert abs(e.settings.omega - 3.0) <= step + 0.01
     assert e.bifurcation.marker.location == e.settings.omega
     e.settings.bif_param = "r"
-    assert e.runner.done.wait(60)
+    assert e.diagram.job.done.wait(60)
     fig._trigger_event(Tap(model=fig, x=0.4321, y=-0.5))
     assert abs(e.settings.r - 0.4321) <= 1 / 399
     assert e.bifurcation.marker.location == e.settings.r

@@ -34,23 +34,23 @@ def test_psi_resamples_the_poincare_map_only(make_explorer):
     e = make_explorer()
     before = {v: columns(getattr(e, v).source)
               for v in ("displacement", "phase", "impact_map", "bifurcation")}
-    gen, poincare = e.runner.generation, columns(e.poincare.source)
+    gen, poincare = e.diagram.job.generation, columns(e.poincare.source)
     e.settings.psi = 0.25
     for v, data in before.items():
         for name, col in data.items():
             assert getattr(e, v).source.data[name] is col, (v, name)
-    assert e.runner.generation == gen
+    assert e.diagram.job.generation == gen
     new = np.asarray(e.poincare.source.data["x"])
     assert new.shape != np.shape(poincare["x"]) or not np.allclose(new, poincare["x"])
 
 
 def test_omega_moves_the_marker_not_the_diagram(make_explorer):
     e = make_explorer()
-    diagram, gen = columns(e.bifurcation.source), e.runner.generation
+    diagram, gen = columns(e.bifurcation.source), e.diagram.job.generation
     displacement = columns(e.displacement.source)
     e.settings.omega = 2.8
     assert e.bifurcation.marker.location == 2.8
-    assert e.runner.generation == gen
+    assert e.diagram.job.generation == gen
     for name, col in diagram.items():
         assert e.bifurcation.source.data[name] is col
     assert e.displacement.source.data["x"] is not displacement["x"]
@@ -61,11 +61,11 @@ def test_omega_moves_the_marker_not_the_diagram(make_explorer):
                                          ("k", 2.0)])
 def test_physics_change_recomputes_scene_and_restarts_diagram(make_explorer, name, value):
     e = make_explorer()
-    gen, x = e.runner.generation, e.displacement.source.data["x"]
+    gen, x = e.diagram.job.generation, e.displacement.source.data["x"]
     e.settings.param.update(**{name: value})
-    assert e.runner.generation == gen + 1
+    assert e.diagram.job.generation == gen + 1
     assert e.displacement.source.data["x"] is not x
-    assert e.runner.done.wait(60)
+    assert e.diagram.job.done.wait(60)
     assert f"{name} = {value:g}" in e.bifurcation.figure.title.text
     assert len(e.bifurcation.source.data["omega"]) > 0
 
@@ -74,7 +74,7 @@ def test_superseded_diagram_is_cancelled(make_explorer):
     e = make_explorer()
     for r in (0.1, 0.2, 0.3, 0.9):
         e.settings.r = r
-    assert e.runner.done.wait(60)
+    assert e.diagram.job.done.wait(60)
     assert "r = 0.9" in e.bifurcation.figure.title.text
     values = np.unique(e.bifurcation.source.data["omega"])
     assert values.size <= 40                  # one diagram, not four stacked
@@ -107,10 +107,10 @@ def test_fig2_is_one_point_in_both_maps(make_explorer):
 
 def test_bad_widget_input_keeps_the_last_scene(make_explorer):
     e = make_explorer()
-    x, gen = e.displacement.source.data["x"], e.runner.generation
+    x, gen = e.displacement.source.data["x"], e.diagram.job.generation
     e.settings.m = -1.0
     assert "m" in e.message and e.message_pane.visible
-    assert e.displacement.source.data["x"] is x and e.runner.generation == gen
+    assert e.displacement.source.data["x"] is x and e.diagram.job.generation == gen
     e.settings.m = None                               # an emptied input box
     assert "m" in e.message
     e.settings.m = 1.0
@@ -306,11 +306,11 @@ def test_compare_mode_shows_fig3_and_fig7_on_shared_fixed_axes(make_explorer):
     from app.scenes import BY_KEY as SC
     from app.views import compare
     e = make_explorer()
-    assert e.compare is None
+    assert e.compare.view is None
     e.controls.compare_toggle.value = True
-    for job in e.compare_jobs:
+    for job in e.compare.jobs:
         assert job.done.wait(120), job.name
-    diagrams = [e.compare.diagrams[k] for k in compare.DIAGRAMS]
+    diagrams = [e.compare.view.diagrams[k] for k in compare.DIAGRAMS]
     assert len({id(f.x_range) for _, f in diagrams}) == 1
     assert len({id(f.y_range) for _, f in diagrams}) == 1
     lo, hi = compare.V_RANGE
@@ -321,7 +321,7 @@ def test_compare_mode_shows_fig3_and_fig7_on_shared_fixed_axes(make_explorer):
         assert run.diagram_key() in diagram.CACHE          # computed once, shared
         assert (fig.y_range.start, fig.y_range.end) == compare.V_RANGE   # fixed
     for key in compare.SECTIONS:
-        src, fig = e.compare.sections[key]
+        src, fig = e.compare.view.sections[key]
         run = st.validate({**st.defaults(), **SC[key].settings()})
         ref = compute.section_columns(run)
         assert np.array_equal(src.data["x"], ref["x"]) and len(ref["x"]) > 50

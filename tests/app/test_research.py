@@ -27,7 +27,7 @@ def test_research_card_is_built_only_when_opened(make_explorer):
     assert not e.research.built and len(e.research.card.objects) == 0
     e.research.card.collapsed = False           # opening computes the open tab (the map)
     assert e.research.built
-    assert e.research_job.done.wait(120)
+    assert e.research.job.done.wait(120)
     assert e.research.status[MAP].object.startswith("complete")
     assert e.research.running is None
 
@@ -37,7 +37,7 @@ def test_regime_map_streams_rows_that_agree_with_single_runs(make_explorer, monk
     blocks = []
     rows = e.research.rows
     monkeypatch.setattr(e.research, "rows", lambda kind, b: (blocks.append(b), rows(kind, b)))
-    e.compute_research(MAP)
+    e.research.compute(MAP)
     view = e.research.views[MAP]
     assert len(blocks) >= 2 and blocks[0].rows_done < 24 and blocks[-1].rows_done == 24
     assert [b.start for b in blocks] == sorted(b.start for b in blocks)
@@ -71,15 +71,15 @@ def test_regime_map_is_cancellable(make_explorer, monkeypatch):
 
     def first_then_cancel(kind, block):
         rows(kind, block)
-        e.cancel_research()
+        e.research.cancel()
 
     monkeypatch.setattr(e.research, "rows", first_then_cancel)
-    e.compute_research(MAP)
+    e.research.compute(MAP)
     assert len(calls) == 1                      # no block computed after the cancel
     view = e.research.views[MAP]
     assert 0 < view.rows_done < 60 and np.isnan(view.image).any()
     assert e.research.status[MAP].object.startswith("cancelled after")
-    assert e.research.running is None and e.research_job.done.is_set()
+    assert e.research.running is None and e.research.job.done.is_set()
 
 
 def test_basins_supersede_the_map(make_explorer, monkeypatch):
@@ -92,18 +92,18 @@ def test_basins_supersede_the_map(make_explorer, monkeypatch):
         rows(kind, block)
         if kind == MAP and not asked:
             asked.append(1)
-            e.compute_research(BASINS)
+            e.research.compute(BASINS)
 
     monkeypatch.setattr(e.research, "rows", switch)
-    e.compute_research(MAP)
-    assert e.research_job.done.wait(60)
+    e.research.compute(MAP)
+    assert e.research.job.done.wait(60)
     assert e.research.status[MAP].object.startswith("cancelled after")
     assert e.research.status[BASINS].object.startswith("complete: 20 rows")
 
 
 def test_regime_map_tap_sets_both_parameters(make_explorer):
     e = make_explorer(map_n="12")
-    e.compute_research(MAP)
+    e.research.compute(MAP)
     view = e.research.views[MAP]
     assert view.current.data == {"x": [2.0], "y": [0.8]}
     tap(view, 2.8, 0.6)
@@ -114,7 +114,7 @@ def test_regime_map_tap_sets_both_parameters(make_explorer):
 
 def test_regime_map_in_other_parameters(make_explorer):
     e = make_explorer(map_n="6", map_x="c", map_y="k")
-    e.compute_research(MAP)
+    e.research.compute(MAP)
     view = e.research.views[MAP]
     assert view.figure.xaxis.axis_label.startswith("damping c")
     assert (view.figure.x_range.start < 0 < view.figure.x_range.end)
@@ -124,7 +124,7 @@ def test_regime_map_in_other_parameters(make_explorer):
 
 def test_basins_tap_starts_the_scene_on_that_attractor(make_explorer):
     e = make_explorer(basins_n="30", **PAPER_R08)
-    e.compute_research(BASINS)
+    e.research.compute(BASINS)
     view = e.research.views[BASINS]
     assert e.research.status[BASINS].object.startswith("complete: 30 rows")
     labels = [a.label for a in view.attractors]
@@ -167,12 +167,12 @@ def test_wall_time_ends_with_partial_results_and_a_message():
 def test_refused_settings_show_the_cores_message(make_explorer):
     """r = 1, c = 0: nothing attracts; and a start window the core refuses."""
     e = make_explorer(basins_n="8", r="1", c="0")
-    e.compute_research(BASINS)
+    e.research.compute(BASINS)
     text = e.research.status[BASINS].object
     assert "no dissipation" in text, text
     req = research.BasinsRequest(e._wanted, (-1.0, 1.0), (-1.0, 1.0), 8)   # x below g
     e.research.started(BASINS, req)
-    e.research_job.submit((BASINS, req))
+    e.research.job.submit((BASINS, req))
     assert e.research.status[BASINS].object.startswith("not computed — ValueError")
     assert "x_range" in e.research.status[BASINS].object
 
@@ -201,8 +201,8 @@ def test_csv_headers_name_every_setting_and_parse(make_explorer):
     import importlib.metadata
     e = make_explorer(map_n="8", basins_n="10", bif_sweep="both", bif_min="2.5",
                       bif_max="2.8", bif_n="7", method="rk45", c="0.07", **PAPER_R08)
-    e.compute_research(MAP)
-    e.compute_research(BASINS)
+    e.research.compute(MAP)
+    e.research.compute(BASINS)
     version = importlib.metadata.version("impact-explorer")
     bif = parse(e.downloads.bifurcation_csv())
     rmap = parse(e.downloads.regime_map_csv(e.research.views[MAP]))
@@ -239,13 +239,13 @@ def test_csv_headers_name_every_setting_and_parse(make_explorer):
 
 def test_a_picture_says_when_its_settings_changed(make_explorer):
     e = make_explorer(map_n="6", basins_n="6", **PAPER_R08)
-    e.compute_research(MAP)
-    e.compute_research(BASINS)
+    e.research.compute(MAP)
+    e.research.compute(BASINS)
     m, b = e.research.views[MAP].figure.title, e.research.views[BASINS].figure.title
     assert "settings changed" not in m.text + b.text
     e.settings.param.update(omega=2.7, r=0.7)         # the map's own axes: still valid
     assert "settings changed" not in m.text and "settings changed" in b.text
     e.settings.c = 0.06
     assert "settings changed" in m.text
-    e.compute_research(MAP)
+    e.research.compute(MAP)
     assert "settings changed" not in m.text

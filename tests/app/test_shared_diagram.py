@@ -55,7 +55,7 @@ def test_two_sessions_one_computation(counted):
     a = Explorer(args=ARGS)
     b = Explorer(args=ARGS)                   # arrives while a's diagram is in flight
     gate.set()
-    assert a.runner.done.wait(60) and b.runner.done.wait(60)
+    assert a.diagram.job.done.wait(60) and b.diagram.job.done.wait(60)
     assert sorted(seen) == pytest.approx(np.linspace(0.5, 4, 24).tolist())   # once each
     ref = reference(ARGS)
     assert points(a.bifurcation) == ref and points(b.bifurcation) == ref
@@ -67,10 +67,10 @@ def test_a_finished_diagram_is_sent_at_once(counted):
     seen, gate = counted
     gate.set()
     a = Explorer(args=ARGS)
-    assert a.runner.done.wait(60)
+    assert a.diagram.job.done.wait(60)
     n = len(seen)
     b = Explorer(args=ARGS)
-    assert b.runner.done.is_set()             # no computation: streamed from the cache
+    assert b.diagram.job.done.is_set()             # no computation: streamed from the cache
     assert len(seen) == n and points(b.bifurcation) == points(a.bifurcation)
     assert b.diagram_status.object.startswith("complete")
 
@@ -79,9 +79,9 @@ def test_one_session_leaving_does_not_stop_the_others(counted):
     seen, gate = counted
     a = Explorer(args=ARGS)
     b = Explorer(args=ARGS)
-    a.runner.cancel()                         # a's tab closes mid-diagram
+    a.diagram.job.cancel()                         # a's tab closes mid-diagram
     gate.set()
-    assert b.runner.done.wait(60)
+    assert b.diagram.job.done.wait(60)
     assert points(b.bifurcation) == reference(ARGS)
     assert len(seen) == 24
 
@@ -90,7 +90,7 @@ def test_a_diagram_nobody_follows_stops(counted):
     seen, gate = counted
     a = Explorer(args=ARGS)
     key = a.run.diagram_key()
-    a.runner.cancel()
+    a.diagram.job.cancel()
     gate.set()
     for _ in range(100):                      # the next chunk task sees it and stops
         if key not in diagram.CACHE:
@@ -108,7 +108,7 @@ def test_finished_diagrams_stay_within_the_memory_bound(counted, monkeypatch):
     keys, sizes = [], []
     for c in ("0.05", "0.06", "0.07", "0.08", "0.09", "0.1"):
         e = Explorer(args={**ARGS, "c": c})
-        assert e.runner.done.wait(60)
+        assert e.diagram.job.done.wait(60)
         keys.append(e.run.diagram_key())
     held = [k for k in keys if k in small]
     assert keys[-1] in held and len(held) < len(keys)     # the oldest went first

@@ -212,7 +212,7 @@ def test_branch_overlay_is_built_on_request_and_switched_off(make_explorer):
     names = {r.name for r in e.bifurcation.figure.renderers}
     assert not names & {"branches_stable", "branches_unstable", "branch_events"}
     e.settings.branches = True
-    assert e.runner.done.wait(60) and e.branch_job.done.wait(120)
+    assert e.diagram.job.done.wait(60) and e.diagram.branch_job.done.wait(120)
     names = {r.name for r in e.bifurcation.figure.renderers}
     assert {"branches_stable", "branches_unstable", "branch_events"} <= names
     shown = e.branches.stable.data["xs"]

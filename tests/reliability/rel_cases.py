@@ -243,7 +243,7 @@ def _session():
     from app.explorer import Explorer
 
     e = Explorer(args=dict(SMALL))
-    e.runner.cancel()
+    e.diagram.job.cancel()
     return e
 
 
@@ -264,10 +264,10 @@ def _widget(settings_changes: dict, widget_changes: dict) -> Callable[[], Outcom
     def act():
         e = _session()
         e.settings.param.update(**_good_values())
-        e.runner.cancel()
+        e.diagram.job.cancel()
         if settings_changes:
             e.settings.param.update(**settings_changes)
-            e.runner.cancel()
+            e.diagram.job.cancel()
         assert e.message == "", e.message
         before = _scene_data(e)
         try:
@@ -276,7 +276,7 @@ def _widget(settings_changes: dict, widget_changes: dict) -> Callable[[], Outcom
         except Exception as exc:          # noqa: BLE001
             return Outcome("crash", f"{type(exc).__name__}: {exc}")
         finally:
-            e.runner.cancel()
+            e.diagram.job.cancel()
         after = _scene_data(e)
         kept = all(after[v] is before[v] for v in before)
         msg = _seen(e.message)
@@ -286,7 +286,7 @@ def _widget(settings_changes: dict, widget_changes: dict) -> Callable[[], Outcom
                        + (" ⚠ " + badge.split("⚠")[1].strip() if "⚠" in badge else ""),
                        True))
         e.settings.param.update(**_good_values())
-        e.runner.cancel()
+        e.diagram.job.cancel()
         return out
     return act
 
@@ -302,7 +302,7 @@ def _url(args: dict) -> Callable[[], Outcome]:
             e = Explorer(args={k: [v.encode()] for k, v in query.items()})
         except Exception as exc:          # noqa: BLE001
             return Outcome("crash", f"{type(exc).__name__}: {exc}", False)
-        e.runner.cancel()
+        e.diagram.job.cancel()
         shown = len(e.displacement.source.data.get("x", ())) > 0 and e.run is not None
         msg = _seen(e.message)
         if msg:

@@ -146,8 +146,8 @@ def test_a_session_is_garbage_once_its_links_are_released():
     from app.explorer import Explorer
 
     e = Explorer(args={"bif_n": [b"24"]})
-    e.runner.cancel()
-    assert e.runner.done.wait(60)
+    e.diagram.job.cancel()
+    assert e.diagram.job.done.wait(60)
     time.sleep(0.2)                 # the diagram worker drops its last reference
     e.release_links()
     ref = weakref.ref(e)

@@ -165,7 +165,7 @@ def test_hostile_link_is_rejected_as_numbers_and_touches_nothing():
     _SEEN["on"] = True
     try:
         e = Explorer(args=query)
-        e.runner.cancel()
+        e.diagram.job.cancel()
         for w in ("m", "k", "omega"):            # and typed into the widgets
             try:
                 e.widgets[w].value = HOSTILE[w]
