@@ -57,8 +57,7 @@ class SessionLoop:
     def __init__(self, doc):
         self.doc = doc
         self._ready = doc is None
-        self._waiting: list[Callable[[], None]] = []
-        self._queue: list[Callable[[], None]] = []
+        self._queue: list[Callable[[], None]] = []     # sent, not run yet (oldest first)
         self._lock = threading.Lock()
         self._io_loop = None
         if doc is not None:
@@ -70,23 +69,20 @@ class SessionLoop:
             fn()
             return
         with self._lock:
-            if not self._ready:
-                self._waiting.append(fn)
-                return
             self._queue.append(fn)
+            if not self._ready:
+                return
         self._io_loop.add_callback(self._wake)
 
     def ready(self) -> None:
         """The page is up: run what waited, and from now on run at the next tick."""
         with self._lock:
             self._ready = True
-            waiting, self._waiting = self._waiting, []
-        self._run(waiting)
+        self._drain()
 
     def close(self) -> None:
         """The session is gone: forget what waits."""
         with self._lock:
-            self._waiting.clear()
             self._queue.clear()
 
     def _wake(self) -> None:
