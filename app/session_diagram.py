@@ -31,13 +31,11 @@ class SessionDiagram:
         self.parts: list[dict] = []       # its chunks so far (branch seeds)
         self.end = None                   # "complete", "partial (time limit)", "failed"
         self._branches = False            # the overlay is on
-        self._drawn = self._recorded = 0
 
     def restart(self, run, start: bool) -> None:
         """A new diagram for ``run``: views cleared, status "computing"; the job starts
         when ``start`` (a served page starts it once the page is up)."""
-        self.run, self._drawn, self._recorded = run, 0, 0
-        self.parts, self.end = [], None
+        self.run, self.parts, self.end = run, [], None
         if run.branches:
             self.branch_job.cancel()
             for view in self._views:
@@ -76,15 +74,15 @@ class SessionDiagram:
 
     def _on_chunk(self, part: dict, done: int, total: int) -> None:
         self.parts.append(part)
-        self._drawn += len(part["drawn"])
-        self._recorded += len(part["omega"])
         for view in self._views:
             view.diagram_chunk(part)
         self._controls.show_diagram(f"computing… {done}/{total} "
                                     f"{SYMBOLS[self.run.bif_param]} values", done, total)
 
     def _on_done(self, info: dict) -> None:
-        text, end = diagram.status_text(self.run, info, self._recorded, self._drawn)
+        recorded = sum(len(p["omega"]) for p in self.parts)
+        drawn = sum(len(p["drawn"]) for p in self.parts)
+        text, end = diagram.status_text(self.run, info, recorded, drawn)
         self._controls.show_diagram(text, info["done"], info["total"])
         self._ended(end)
 
