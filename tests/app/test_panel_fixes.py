@@ -34,7 +34,6 @@ def test_the_private_parts_the_workarounds_touch_exist():
     assert "scroll_button_threshold" in pn.Column.param      # GRID_COLUMN_CSS
 
 
-
 def test_the_bokehjs_parts_the_reconnect_fix_touches_exist():
     """RECONNECT_JS patches BokehJS's ClientConnection by name; a BokehJS that renamed
     them (or fixed the repull) fails here."""
@@ -48,4 +47,3 @@ def test_the_bokehjs_parts_the_reconnect_fix_touches_exist():
     assert "this.session.document.replace_with_json(n)" in bokehjs
     for name in ("client/connection", "protocol/receiver", "document"):
         assert f'"{name}"' in panel_fixes.RECONNECT_JS
-

@@ -84,6 +84,32 @@ def query(page) -> dict:
     return {k: v[-1] for k, v in parse_qs(urlparse(page.url).query).items()}
 
 
+def watch_reconnect(page) -> None:
+    """Count BokehJS's reconnect events on the page's document from now on:
+    ``client_reconnected`` (socket open, session acknowledged, document pulled again) and
+    ``document_ready`` (the redrawn views are ready; app.panel_fixes.RECONNECT_JS makes
+    it come again after a reconnect)."""
+    page.evaluate("""() => { window.__ieReconnected = 0; window.__ieReady = 0;
+      const doc = Bokeh.documents[0];
+      doc.on_event('client_reconnected', () => { window.__ieReconnected += 1 });
+      doc.on_event('document_ready', () => { window.__ieReady += 1 }) }""")
+
+
+def wait_reconnected(page, describe=lambda: "") -> None:
+    """Wait (after ``watch_reconnect``) until the page has reconnected and redrawn its
+    views. Keys pressed into the old widgets while it redraws are lost, as they would be
+    for a person. ``describe()`` adds context to a failure."""
+    try:                                  # BokehJS retries after 1, 2, 4, 8 ... s
+        page.wait_for_function("() => window.__ieReconnected > 0", timeout=60_000, polling=200)
+    except Exception:
+        raise AssertionError(f"the page never reconnected; {describe()}") from None
+    try:
+        page.wait_for_function("() => window.__ieReady > 0", timeout=30_000, polling=100)
+    except Exception:
+        raise AssertionError(f"the page was not redrawn after the reconnect; {describe()}") \
+            from None
+
+
 def handle(page, name):
     return page.locator(f".ie-w-{name} .noUi-handle").first
 

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import pytest
 
-from test_app_browser import JS, READY, STATE, handle
+from test_app_browser import JS, READY, STATE, handle, wait_reconnected, watch_reconnect
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "reliability"))
 from rel_proxy import NGINX_CONF, ProxiedApp, Proxy, nginx_binary  # noqa: E402
@@ -175,18 +175,11 @@ def test_a_page_reconnects_through_a_restarted_proxy_to_its_own_session(page, pr
     page.evaluate("() => { window.__ieNoReload = true; }")
     disp = page.evaluate("ie.data('displacement').x.length + ':' + ie.sum('displacement', 'x')")
 
-    # BokehJS's own signal that the reconnect is through (socket open, document pulled
-    # again and redrawn); a key pressed before it goes nowhere
-    page.evaluate("() => { window.__ieReconnected = 0; Bokeh.documents[0].on_event("
-                  "'client_reconnected', () => { window.__ieReconnected += 1 }) }")
+    watch_reconnect(page)
     proxied.proxy.stop()                    # every connection through nginx drops
     time.sleep(3.0)
     proxied.proxy = Proxy(proxied.port, [b.port for b in proxied.backends])
-    try:                                    # BokehJS retries after 1, 2, 4, 8 ... s
-        page.wait_for_function("() => window.__ieReconnected > 0", timeout=60_000,
-                               polling=200)
-    except Exception:
-        raise AssertionError("the page never reconnected") from None
+    wait_reconnected(page, lambda: page.evaluate(STATE))
     omega = handle(page, "omega")
     omega.focus()
     for _ in range(5):

@@ -22,7 +22,7 @@ from pathlib import Path
 import pytest
 
 from tcp_relay import Relay
-from test_app_browser import JS, READY, STATE, handle
+from test_app_browser import JS, READY, STATE, handle, wait_reconnected, watch_reconnect
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -85,12 +85,7 @@ def test_page_recovers_after_the_websocket_is_cut_and_keeps_its_settings(page, r
                            timeout=30_000)
     page.evaluate("() => { window.__ieNoReload = true; window.__ieDoc = Bokeh.documents[0]; }")
     disp = page.evaluate("ie.data('displacement').x.length + ':' + ie.sum('displacement', 'x')")
-    # BokehJS announces a finished reconnect (socket open, session acknowledged, document
-    # pulled again) with a document event; a key pressed before that goes nowhere
-    page.evaluate("() => { window.__ieReconnected = 0; window.__ieReady = 0; "
-                  "const doc = Bokeh.documents[0]; "
-                  "doc.on_event('client_reconnected', () => { window.__ieReconnected += 1 }); "
-                  "doc.on_event('document_ready', () => { window.__ieReady += 1 }) }")
+    watch_reconnect(page)
     console = []
     page.on("console", lambda m: console.append(f"{m.type}: {m.text}"))
 
@@ -119,18 +114,7 @@ def test_page_recovers_after_the_websocket_is_cut_and_keeps_its_settings(page, r
     assert relayed.refused >= 1, "the page did not try to reconnect while the link was down"
     assert page.evaluate("window.__ieReconnected") == 0
     relayed.restore()
-    try:                                  # BokehJS retries after 1, 2, 4, 8 ... s
-        page.wait_for_function("() => window.__ieReconnected > 0", timeout=60_000, polling=200)
-    except Exception:
-        raise AssertionError(f"the page never reconnected (cut after {relayed.cut_after!r}); "
-                             f"server log:\n{relayed.log.read_text()[-3000:]}") from None
-    # the reconnect pulls the document again and redraws every view from it; keys
-    # pressed into the old widgets while that happens are lost, as they would be for a
-    # person, so the test waits for the redrawn page to announce itself ready
-    try:
-        page.wait_for_function("() => window.__ieReady > 0", timeout=30_000, polling=100)
-    except Exception:
-        raise AssertionError(f"the page was not redrawn after the reconnect: {diagnose()}") from None
+    wait_reconnected(page, lambda: f"cut after {relayed.cut_after!r}; {diagnose()}")
 
     # more moves after the outage reach the server and come back as new views
     for _ in range(4):
