@@ -123,7 +123,6 @@ def profile(n: int) -> dict:
     prof = cProfile.Profile(time.thread_time)
     for _ in range(n):
         one_session(prof)
-        gc.collect()
     stats = pstats.Stats(prof).stats
     total = sum(v[2] for v in stats.values())
 
