@@ -10,13 +10,14 @@ callbacks it passes in.
 from __future__ import annotations
 
 import html
+import re
 
 import panel as pn
 from bokeh.layouts import column as bokeh_column
 import param
 
-from .page_style import (CAPTION_CSS, CELL_CSS, CSS, GRID_CSS, MAIN_CSS, MODAL_CSS,
-                         NOTE_CSS, PAGE_CSS, PNG_JS, SIDEBAR_CSS)
+from .page_style import (CAPTION_CSS, CELL_CSS, CSS, GRID_CSS, LINE_CSS, MAIN_CSS,
+                         MODAL_CSS, NOTE_CSS, PAGE_CSS, PNG_JS, SIDEBAR_CSS)
 from .panel_fixes import GRID_COLUMN_CSS, PromptFloatSlider
 from .scenes import SCENES
 from .settings import ON_DIAGRAM, RESEARCH, SETTINGS
@@ -33,6 +34,12 @@ EXTRA_NOTES = {"bifurcation": (
     "Bifurcation diagram", "For each ω on the axis, the impact velocities after the "
     "transient. One dot per ω: one impact per period; several: period-n or multi-impact "
     "motion; a smear: chaos. The red line is the current ω.")}
+
+
+def _line(markup: str) -> str:
+    """``markup`` as one line of fixed height (LINE_CSS), its whole text as hover text."""
+    title = html.escape(html.unescape(re.sub(r"<[^>]+>", "", markup)), quote=True)
+    return f'<div class="ie-line" title="{title}">{markup}</div>'
 
 
 class NamedHTML(pn.pane.HTML):
@@ -115,10 +122,10 @@ class Controls:
         self.message_pane = pn.pane.Alert("", alert_type="warning", visible=False,
                                           css_classes=["ie-message"],
                                           sizing_mode="stretch_width", margin=(0, 5))
-        self.badge = pn.pane.HTML("", css_classes=["ie-badge"], stylesheets=[CSS],
-                                  margin=(0, 5))
+        self.badge = pn.pane.HTML("", css_classes=["ie-badge"], stylesheets=[CSS, LINE_CSS],
+                                  margin=(0, 5), sizing_mode="stretch_width")
         self.stability = NamedHTML("", model_name=STABILITY_NAME,
-                                   css_classes=["ie-stability"], stylesheets=[CSS],
+                                   css_classes=["ie-stability"], stylesheets=[CSS, LINE_CSS],
                                    margin=(0, 5), sizing_mode="stretch_width")
         self.caption = pn.pane.Markdown(CAPTION, css_classes=["ie-caption"],
                                         sizing_mode="stretch_width", margin=(0, 5),
@@ -268,12 +275,12 @@ class Controls:
         warn = ""
         if scene.status != 0:
             warn = f" <span style='color:#b35900'>⚠ {scene.message}</span>"
-        self.badge.object = (f"Motion: <b>{scene.label}</b> · {scene.run.method} · computed "
-                             f"in {scene.elapsed * 1e3:.2f} ms{warn}")
+        self.badge.object = _line(f"Motion: <b>{scene.label}</b> · {scene.run.method} · "
+                                  f"computed in {scene.elapsed * 1e3:.2f} ms{warn}")
 
     def show_stability(self, html: str | None) -> None:
         """The stability readout (``stability_readout``); None while it is computed."""
-        self.stability.object = html or "Stability: computing…"
+        self.stability.object = _line(html or "Stability: computing…")
 
     def show_caption(self, text: str) -> None:
         self.caption.object = text

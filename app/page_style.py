@@ -54,6 +54,13 @@ details[open] div { position: absolute; z-index: 20; background: #fffbe8; margin
                     width: min(46em, 80vw); font-size: 15px; color: #222; }
 details div p { margin: 4px 0; }
 """
+#: The readout lines above the figures (badge, stability) keep one line's height whatever
+#: their text: a result arriving never moves the figures under the pointer. The whole
+#: text is the line's hover text.
+LINE_CSS = """
+:host { height: 20px; overflow: hidden; }
+.ie-line { white-space: nowrap; overflow: hidden; text-overflow: ellipsis; }
+"""
 CAPTION_CSS = """
 :host { max-height: 4.6em; overflow-y: auto; }
 p { margin: 2px 0; }

@@ -27,6 +27,22 @@ def wait_complete(page, css: str, timeout: float = 60.0) -> str:
     raise AssertionError(f"{css}: {text(page, css)}")
 
 
+#: Where a figure's canvas sits on the page.
+RECT = """(name) => {
+  const m = Bokeh.documents[0].get_model_by_name(name);
+  const r = Bokeh.index.find_one_by_id(m.id).canvas_view.el.getBoundingClientRect();
+  return [r.left, r.top, r.width, r.height];
+}"""
+
+
+def settled(page) -> None:
+    """The scene's results are all in: the stability readout is no longer computing."""
+    deadline = time.monotonic() + 20
+    while "computing" in (readout := text(page, "ie-stability")):
+        assert time.monotonic() < deadline, readout
+        page.wait_for_timeout(100)
+
+
 def disp_sum(page) -> float:
     return page.evaluate("ie.sum('displacement', 'x')")
 
@@ -51,11 +67,17 @@ def test_regime_map_and_basins_fill_and_taps_change_the_scene(page, server):
     assert body[0] == "omega,r,m,n,class" and len(body) == 1 + 100 * 100
 
     before = disp_sum(page)
+    settled(page)
+    rect = page.evaluate(RECT, "regime_map_figure")
     tap(page, "regime_map_figure", 2.8, 0.6)
     page.wait_for_function("() => Math.abs(ie.model('bifurcation_marker').location - 2.8) < 0.03",
                            timeout=10_000)
     expect(page.locator(".ie-w-r input").first).to_have_value("0.600", timeout=10_000)
     page.wait_for_function(f"() => ie.sum('displacement', 'x') !== {before}", timeout=10_000)
+    # results arriving (scene, badge, stability) never move the figure under the pointer
+    page.wait_for_timeout(200)
+    settled(page)
+    assert page.evaluate(RECT, "regime_map_figure") == rect
 
     # back to the paper's r = 0.8, omega = 2.62 and on to the basins tab
     tap(page, "regime_map_figure", 2.62, 0.8)
