@@ -1,5 +1,6 @@
 """A served app on a free loopback port, and Debian's Chromium for pytest-playwright."""
 import os
+import re
 import signal
 import socket
 import subprocess
@@ -35,6 +36,32 @@ def browser_type_launch_args(browser_type_launch_args):
 @pytest.fixture(scope="session")
 def browser_context_args(browser_context_args):
     return {**browser_context_args, "viewport": {"width": 1400, "height": 1000}}
+
+
+#: A line of the served app's log that a browser test must not cause: a Python logging
+#: record (Bokeh's, Tornado's, param's, the app's) at WARNING or above, or a traceback.
+BAD_LINE = re.compile(r"\b(WARNING|ERROR|CRITICAL)\b|Traceback")
+
+
+def bad_lines(text: str) -> list[str]:
+    return [line for line in text.splitlines() if BAD_LINE.search(line)]
+
+
+@pytest.fixture(autouse=True)
+def clean_server_log(request):
+    """A test that uses the served app fails on any warning or error the server logs
+    while it runs (lines logged between tests are charged to the next one)."""
+    if "server" not in request.fixturenames:
+        yield
+        return
+    log = request.getfixturevalue("server").log
+    start = log.stat().st_size
+    yield
+    with open(log, "rb") as f:
+        f.seek(start)
+        new = f.read().decode("utf-8", "replace")
+    bad = bad_lines(new)
+    assert not bad, "the server logged:\n" + "\n".join(bad[:20])
 
 
 def _free_port() -> int:
