@@ -10,6 +10,7 @@ callbacks it passes in.
 from __future__ import annotations
 
 import html
+import math
 import re
 
 import panel as pn
@@ -18,6 +19,7 @@ import param
 
 from .page_style import (CAPTION_CSS, CELL_CSS, CSS, GRID_CSS, LINE_CSS, MAIN_CSS,
                          MODAL_CSS, NOTE_CSS, PAGE_CSS, PNG_JS, SIDEBAR_CSS)
+from .captions import DEFAULT_CAPTION as CAPTION
 from .panel_fixes import GRID_COLUMN_CSS, PromptFloatSlider
 from .scenes import SCENES
 from .settings import ON_DIAGRAM, RESEARCH, SETTINGS
@@ -25,10 +27,7 @@ from .settings import ON_DIAGRAM, RESEARCH, SETTINGS
 SIDEBAR_WIDTH = 300
 STATUS_NAME = "bifurcation_status"
 STABILITY_NAME = "stability_readout"
-CAPTION = ("Paper defaults: m = 1, c = 0.05, k = 1, g = 0, r = 0.8, ω = 2. "
-           "Pick a scene of the paper or move a slider.")
-CHANGED_NOTE = "\n\n*Settings changed since this scene was loaded.*"
-PICK = "Scene of the paper…"
+PICK = "Paper defaults"
 #: The diagram's note (its view's file belongs to the diagram's owners).
 EXTRA_NOTES = {"bifurcation": (
     "Bifurcation diagram", "For each ω on the axis, the impact velocities after the "
@@ -56,6 +55,15 @@ class NamedHTML(pn.pane.HTML):
         return model
 
 
+def slider_span(s, value) -> dict:
+    """Start and end of setting ``s``'s slider: its teaching range, widened to hold
+    ``value`` (a number typed beyond it)."""
+    lo, hi = s.soft
+    if isinstance(value, (int, float)) and math.isfinite(value):
+        lo, hi = min(lo, value), max(hi, value)
+    return {"start": lo, "end": hi}
+
+
 def make_widget(settings, s):
     """(widget, page item) editing setting ``s`` of ``settings``: the widget holds the
     value as typed (a number box, select), the item is what the page shows.
@@ -68,11 +76,17 @@ def make_widget(settings, s):
     par = settings.param[s.name]
     css = [f"ie-w-{s.name}"]
     if s.widget == "slider":
-        box = pn.widgets.FloatInput.from_param(par, label=s.label, format=s.fmt,
-                                               description=None, sizing_mode="stretch_width")
+        # the box takes any number (the session applies it or says why not); the
+        # slider spans the teaching range, and its end moves out to a value beyond
+        box = pn.widgets.FloatInput.from_param(par, label=s.label, format=s.fmt, start=None,
+                                               end=None, description=None,
+                                               sizing_mode="stretch_width")
         slider = PromptFloatSlider.from_param(par, label="", start=s.soft[0], end=s.soft[1],
                                               step=s.step, show_value=False,
                                               sizing_mode="stretch_width", margin=(0, 10))
+        settings.param.watch(lambda event: slider.param.update(**slider_span(s, event.new)),
+                             s.name)
+        slider.param.update(**slider_span(s, getattr(settings, s.name)))
         return box, pn.Column(box, slider, css_classes=css, sizing_mode="stretch_width")
     if s.widget == "toggle":
         toggle = pn.widgets.Toggle.from_param(par, label=s.label, color="default", width=100,
@@ -114,7 +128,7 @@ def _card(title: str, objects: list, open_: bool = False):
 class Controls:
     """Widgets, panes and layout of one session's page."""
 
-    def __init__(self, settings, views, *, on_scene, on_accuracy, downloads):
+    def __init__(self, settings, views, *, on_scene, on_accuracy, downloads, on_reset):
         made = {s.name: make_widget(settings, s) for s in SETTINGS}
         self.widgets = {name: widget for name, (widget, _) in made.items()}
         self._items = {name: item for name, (_, item) in made.items()}
@@ -134,7 +148,12 @@ class Controls:
             options={PICK: PICK, **{sc.label: sc.key for sc in SCENES}}, value=PICK,
             css_classes=["ie-scene"], width=190, margin=(4, 5),
             description="Load the settings of one of the paper's figures")
+        self._scene_shown = PICK
         self.scene_picker.param.watch(lambda event: self._picked(event.new, on_scene), "value")
+        self.reset_button = pn.widgets.Button(
+            label="Reset", width=70, margin=(4, 5), css_classes=["ie-reset"],
+            description="Back to the settings of the scene loaded (or the paper's defaults)")
+        self.reset_button.on_click(lambda event: on_reset())
         self.progress = pn.indicators.Progress(value=0, max=100, width=120, height=12,
                                                bar_color="primary", margin=(6, 5))
         self.diagram_status = NamedHTML("", model_name=STATUS_NAME,
@@ -160,9 +179,13 @@ class Controls:
         self.layout = self._layout(views, downloads)
 
     def _picked(self, key, on_scene) -> None:
-        if key != PICK:
-            on_scene(key)
-            self.scene_picker.value = PICK      # the same scene can be picked again
+        if key != self._scene_shown:
+            on_scene(None if key == PICK else key)
+
+    def show_scene(self, key: str | None) -> None:
+        """The picker shows the scene loaded (None: the paper's defaults)."""
+        self._scene_shown = PICK if key is None else key
+        self.scene_picker.value = self._scene_shown
 
     # -- layout ------------------------------------------------------------------------
 
@@ -217,7 +240,7 @@ class Controls:
         header = pn.FlexBox(
             self.sidebar_toggle,
             pn.pane.HTML("<b style='font-size:17px'>Impact Explorer</b>", margin=(8, 5)),
-            self.scene_picker,
+            self.scene_picker, self.reset_button,
             *(self._items[s.name] for s in SETTINGS if s.group in ("header", ON_DIAGRAM)),
             self.compare_toggle, self.pin_toggle, self.png_button, self._notes(views),
             self.progress, self.diagram_status,
@@ -284,14 +307,6 @@ class Controls:
 
     def show_caption(self, text: str) -> None:
         self.caption.object = text
-
-    def mark_caption(self, changed: bool) -> None:
-        """Note on the scene's caption whether the settings moved away from it."""
-        text = self.caption.object
-        if changed and not text.endswith(CHANGED_NOTE):
-            self.caption.object = text + CHANGED_NOTE
-        elif not changed and text.endswith(CHANGED_NOTE):
-            self.caption.object = text[: -len(CHANGED_NOTE)]
 
     def show_diagram(self, text: str, done: int | None = None, total: int | None = None):
         """The diagram's status line (``bifurcation_status``) and progress bar."""

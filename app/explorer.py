@@ -24,16 +24,15 @@ from concurrent.futures import ThreadPoolExecutor
 
 import panel as pn
 
-from . import accuracy, compute, stability, state
+from . import accuracy, captions, compute, stability, state
 from .compare_mode import CompareMode
 from .controls import Controls
 from .downloads import Downloads
 from .jobs import Job, SessionLoop, session_doc
-from .panel_fixes import release_links, repair_reconnect
+from .panel_fixes import release_links, repair_reconnect, restore_on_history
 from .research_panel import ResearchPanel
-from .scenes import BY_KEY
 from .session_diagram import SessionDiagram
-from .settings import BY_NAME, QUERY_NAMES, Settings
+from .settings import BY_NAME, QUERY_NAMES, SWEEP_RANGES, Settings
 from .views import VIEWS
 from .views._figure import share_helpers
 
@@ -53,11 +52,10 @@ class Explorer(pn.viewable.Viewer):
 
     def __init__(self, args=None, **params):
         super().__init__(**params)
-        values, errors = state.initial_settings(args or {})
+        values, scene, errors = state.from_query(args or {})
         self.settings = Settings(**values)
         self.run = self.scene = self.section = None
-        self._scene_key = state.scene_of(args or {})   # the paper's scene loaded last
-        self._scene_run = None            # run as loaded by the last scene button
+        self._scene_key = scene           # the paper's scene loaded last (None: defaults)
         self._wanted = None               # the latest valid settings (may be computing)
         self._keep_message = True         # the link's message stays until a user change
         self._restoring = False           # falling back to defaults (not a user change)
@@ -79,7 +77,8 @@ class Explorer(pn.viewable.Viewer):
         share_helpers([v.figure for v in self.views if v.figure is not None])
         self.downloads = Downloads(self)
         self.controls = c = Controls(self.settings, self.views, on_scene=self.load_scene,
-                                     on_accuracy=self._on_accuracy, downloads=self.downloads)
+                                     on_accuracy=self._on_accuracy, downloads=self.downloads,
+                                     on_reset=self.reset)
         self.widgets, self.badge, self.caption = c.widgets, c.badge, c.caption
         self.message_pane, self.diagram_status = c.message_pane, c.diagram_status
         pool = None if doc is None else _SCENE_POOL
@@ -111,16 +110,13 @@ class Explorer(pn.viewable.Viewer):
         self.settings.param.watch(self._on_display, list(state.DISPLAY_FIELDS))
         self._on_display()
         self._apply()
-        if self._scene_key is not None:
-            self.controls.show_caption(BY_KEY[self._scene_key].caption)
-            self._scene_run = state.validate(
-                {**state.defaults(), **BY_KEY[self._scene_key].settings()})
+        self.controls.show_scene(self._scene_key)
         if errors:
-            self._message("Some settings in the link were not valid and were replaced by "
-                          "defaults: " + "; ".join(errors))
+            self._message("Not applied from the link: " + "; ".join(errors))
         if doc is not None:
             pn.state.on_session_destroyed(self._on_session_destroyed)
             pn.state.onload(self._on_load)
+            restore_on_history(doc)
 
     def __panel__(self):
         return self.controls.layout
@@ -176,14 +172,19 @@ class Explorer(pn.viewable.Viewer):
             if events:
                 self._write_url()
 
-    def load_scene(self, key: str) -> None:
-        """Load one of the paper's scenes (all settings in one batch)."""
-        sc = BY_KEY[key]
+    def load_scene(self, key: str | None) -> None:
+        """Load one of the paper's scenes (all settings in one batch; None: the paper's
+        defaults). The link and the caption name it even when no number changes."""
         self._scene_key = key
-        self.settings.param.update(**sc.settings())
-        self.controls.show_caption(sc.caption)
-        self._scene_run = self._wanted
-        self._mark_caption()
+        self.controls.show_scene(key)
+        self.settings.param.update(**state.base_settings(key))
+        self._show_caption()
+        if self._wanted == self.run:    # no number changed: no scene result will write it
+            self._write_url()
+
+    def reset(self) -> None:
+        """Back to the scene loaded last (or the paper's defaults)."""
+        self.load_scene(self._scene_key)
 
     def pick(self, **values) -> None:
         """Settings chosen by a gesture on a view (a tap on the diagram, the map...),
@@ -197,10 +198,11 @@ class Explorer(pn.viewable.Viewer):
             self._keep_message = False
         changed = {e.name for e in events}
         st = self.settings
+        span = SWEEP_RANGES[st.bif_param]
         if ("bif_param" in changed and not changed & {"bif_min", "bif_max"}
-                and (st.bif_min, st.bif_max) != (None, None)):
+                and (st.bif_min, st.bif_max) != span):
             # another parameter: its own default range (the nested update applies it)
-            self.settings.param.update(bif_min=None, bif_max=None)
+            self.settings.param.update(bif_min=span[0], bif_max=span[1])
             return
         try:
             with pn.io.hold(self._doc):   # one websocket message for all view updates
@@ -214,7 +216,10 @@ class Explorer(pn.viewable.Viewer):
             run = state.validate(state.snapshot(self.settings))
         except ValueError as exc:
             self._message(f"Not applied — {exc}. Showing the last valid settings.")
+            self._show_applied(self._wanted, refused=True)
             return
+        if self._show_applied(run):
+            return                      # the nested update applied it
         if self._wanted is None or run.diagram_key() != self._wanted.diagram_key():
             self.diagram.restart(run, start=self._loaded)
         if self._wanted is None or (stability.readout_key(run)
@@ -251,17 +256,37 @@ class Explorer(pn.viewable.Viewer):
 
     # -- results -> views (on the event loop) -----------------------------------------------
 
+    def _show_applied(self, run, refused: bool = False) -> bool:
+        """Put the values of ``run`` (the one applied) into the widgets where they show
+        something else: a refused value, a rounded one, an empty range. Keeps the
+        message; True if anything changed (the nested update then applies ``run``)."""
+        if run is None:
+            return False
+        now = state.snapshot(self.settings)
+        differ = {n: v for n, v in state.applied(run).items() if now[n] != v}
+        if not differ:
+            return False
+        keep, self._keep_message = self._keep_message or refused, True
+        self._restoring = True
+        try:
+            self.settings.param.update(**differ)
+        finally:
+            self._restoring = False
+            self._keep_message = keep
+        return True
+
     def _scene_done(self, run, result) -> None:
         if isinstance(result, Exception) and self.run is None:
             # Nothing on screen yet (a link the core refuses): show the defaults.
             self._message(f"Not applied — {result}. Showing the default settings.")
             self._restoring = True
             try:
-                self.settings.param.update(**state.defaults())
+                self.settings.param.update(**state.base_settings(self._scene_key))
             finally:
                 self._restoring = False
         elif isinstance(result, Exception):
             self._message(f"Not applied — {result}. Showing the last valid settings.")
+            self._show_applied(self.run, refused=True)
         else:
             self._show(run, *result)
 
@@ -278,7 +303,7 @@ class Explorer(pn.viewable.Viewer):
                 view.show_section(run, section)
         self.run, self.scene, self.section = run, scene, section
         self.research.show_settings(run)
-        self._mark_caption()
+        self._show_caption()
         self._write_url()
 
     def _accuracy_done(self, run, result) -> None:
@@ -293,9 +318,10 @@ class Explorer(pn.viewable.Viewer):
         self.readout = result
         self.controls.show_stability(stability.to_html(result))
 
-    def _mark_caption(self) -> None:
-        if self._scene_run is not None and self.run is not None:
-            self.controls.mark_caption(self.run != self._scene_run)
+    def _show_caption(self) -> None:
+        run = self._wanted if self._wanted is not None else self.run
+        if run is not None:
+            self.controls.show_caption(captions.caption(run, self._scene_key))
 
     def _message(self, text: str) -> None:
         self.controls.show_message(text, keep=self._keep_message)

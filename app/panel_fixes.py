@@ -159,3 +159,23 @@ def release_links(layout) -> None:
 #: a ``div.scroll-button`` (for ``scroll_button_threshold``) as the last child of every
 #: Column's shadow root; in a grid it is one more grid item and takes a row of its own.
 GRID_COLUMN_CSS = ".scroll-button { display: none !important; }"
+
+
+# -- Back and Forward (Panel 1.9.4) -------------------------------------------------------
+
+#: Upstream: Panel 1.9.4's ``Location`` pushes a history entry for every URL the session
+#: writes but has no ``popstate`` listener, so Back changes the address bar and not the
+#: page. The page is the URL's state: on Back or Forward it loads that URL again.
+HISTORY_JS = """
+if (!window.__ieHistoryFix) {
+  window.__ieHistoryFix = true
+  window.addEventListener("popstate", () => window.location.reload())
+}
+"""
+
+
+def restore_on_history(doc) -> None:
+    """Install ``HISTORY_JS`` in the page of ``doc`` when it is ready (see there)."""
+    from bokeh.models import CustomJS
+
+    doc.js_on_event("document_ready", CustomJS(code=HISTORY_JS))

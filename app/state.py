@@ -21,6 +21,7 @@ same scene data.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import html
 import math
 from collections.abc import Mapping
@@ -36,7 +37,8 @@ from .settings import (BY_NAME, CHOICE_FIELDS, DIAGRAM_FIELDS, DISPLAY_FIELDS, F
 SCENE_NAME = "scene"
 _TRUE, _FALSE = ("1", "true", "yes", "on"), ("0", "false", "no", "off", "")
 
-__all__ = ["DISPLAY_FIELDS", "METHODS", "QUERY_NAMES", "Run", "Settings", "defaults",
+__all__ = ["DISPLAY_FIELDS", "METHODS", "QUERY_NAMES", "Run", "Settings", "SettingsError",
+           "applied", "base_run", "base_settings", "defaults", "differences", "from_query",
            "initial_settings", "parse_query", "scene_of", "snapshot", "to_query", "validate"]
 
 
@@ -97,10 +99,8 @@ def _short(value) -> str:
 
 
 def _in_range(s, x: float) -> bool:
-    if s.physical and il.FIELDS[s.name].hi is None and s.hi is not None:
-        return x <= s.hi            # the app's own ceiling; the core checks the rest
-    if s.physical:
-        return True
+    """``x`` within the setting's range (a physical one's is the core's, with the app's
+    ceiling on top where the core has none)."""
     if s.lo is not None and (x <= s.lo if s.lo_open else x < s.lo):
         return False
     if s.hi is not None and (x >= s.hi if s.hi_open else x > s.hi):
@@ -125,8 +125,17 @@ def rounded(s, x: float) -> float:
     return significant(x)
 
 
+class SettingsError(ValueError):
+    """Settings that cannot be computed; ``fields`` holds the names of the bad ones."""
+
+    def __init__(self, message: str, fields: frozenset):
+        super().__init__(message)
+        self.fields = fields
+
+
 def validate(values: Mapping) -> Run:
-    """Turn raw settings into a ``Run``; raise ValueError naming every bad field."""
+    """Turn raw settings into a ``Run``; raise SettingsError naming every bad field, its
+    value and what is allowed."""
     errors: list[str] = []
     clean: dict = {}
     for name in NUMBER_FIELDS:
@@ -141,7 +150,7 @@ def validate(values: Mapping) -> Run:
         elif not math.isfinite(v):
             errors.append(f"{name}: {_short(v)} is not a finite number")
         elif not _in_range(s, v):
-            errors.append(f"{name}: {s.out_of_range}")
+            errors.append(f"{name}: {v:g} — {s.out_of_range}")
             clean[name] = float(v)          # still usable by the checks between fields
         else:
             clean[name] = float(v) if name == "psi" else rounded(s, float(v))
@@ -164,27 +173,53 @@ def validate(values: Mapping) -> Run:
 
     if "t_end" in clean:
         need(0 <= clean.get("t_record", 0) < clean["t_end"], "t_record",
-             "must be ≥ 0 and less than the total time")
+             f"{clean.get('t_record', 0):g} — must be ≥ 0 and less than the total time "
+             f"({clean['t_end']:g} s)")
     _check_sweep_range(clean, errors)
     if "map_x" in clean and "map_y" in clean:
         need(clean["map_x"] != clean["map_y"], "map_y",
-             "must be another parameter than map_x")
+             f"{clean['map_y']} — must be another parameter than map_x")
     if clean.get("x0") is not None and clean.get("g") is not None:
-        need(clean["x0"] >= clean["g"], "x0", "must be ≥ g (the mass starts on the free side)")
+        need(clean["x0"] >= clean["g"], "x0", f"{clean['x0']:g} — must be ≥ g = {clean['g']:g} "
+             "(the mass starts on the free side)")
     params = None
     phys = {n: clean[n] for n in il.PARAM_NAMES if n in clean}
-    if len(phys) == len(il.PARAM_NAMES):
+    if len(phys) == len(il.PARAM_NAMES) and not _named(errors) & set(il.PARAM_NAMES):
         try:
             params = il.Params(**phys)
         except (ValueError, TypeError) as exc:
             errors.append(html.escape(str(exc)))
     if errors or params is None:
-        raise ValueError("; ".join(errors) or "invalid settings")
+        raise SettingsError("; ".join(errors) or "invalid settings", _named(errors))
     clean["psi"] = psi_fraction(clean["psi"], params.T)
     rest = {_field(n): clean[n] for n in RUN_FIELDS}
     for name in ("bif_n", "map_n", "basins_n"):
         rest[name] = int(rest[name])
     return Run(params=params, **rest)
+
+
+def _named(errors: list[str]) -> frozenset:
+    """The settings named in ``errors`` ("name: ..." or the core's "name=value")."""
+    names = set()
+    for e in errors:
+        head = e.split(":", 1)[0].strip()
+        if head in BY_NAME:
+            names.add(head)
+        names.update(n for n in il.PARAM_NAMES if f"{n}=" in e)
+    return frozenset(names)
+
+
+def applied(run: Run) -> dict:
+    """The settings, as the widgets hold them, that give ``run`` (psi as a fraction of
+    the period, an empty diagram range resolved): what the page shows once it is
+    applied."""
+    out = {}
+    for s in SETTINGS:
+        if s.display:
+            continue
+        out[s.name] = (getattr(run.params, s.name) if s.physical else
+                       run.psi_frac if s.name == "psi" else getattr(run, s.name))
+    return out
 
 
 def _check_sweep_range(clean: dict, errors: list) -> None:
@@ -206,10 +241,10 @@ def _check_sweep_range(clean: dict, errors: list) -> None:
             span = f"{left}, {'∞)' if top is None else f'{top:g}]'}"
             errors.append(f"{field}: {v:g} is outside the range of {sym}, {span}")
     if not any(e.startswith(("bif_min:", "bif_max:")) for e in errors) and not hi > lo:
-        errors.append(f"bif_max: must be greater than the lowest {sym} ({lo:g})")
+        errors.append(f"bif_max: {hi:g} — must be greater than the lowest {sym} ({lo:g})")
     if name == "g" and clean.get("x0") is not None and clean["x0"] < hi:
-        errors.append(f"x0: must be ≥ the largest g of the diagram ({hi:g}), or empty "
-                      "(at the wall)")
+        errors.append(f"x0: {clean['x0']:g} — must be ≥ the largest g of the diagram "
+                      f"({hi:g}), or empty (at the wall)")
 
 
 # -- URL ---------------------------------------------------------------------------
@@ -318,32 +353,85 @@ def url_number(v) -> str:
     return text if digits <= URL_DIGITS else f"{v:.{URL_DIGITS}g}"
 
 
+def base_settings(scene: str | None) -> dict:
+    """The settings a page starts from: the paper's defaults, or a scene's."""
+    return {**defaults(), **(SCENES_BY_KEY[scene].settings() if scene else {})}
+
+
+@functools.lru_cache(maxsize=None)
+def base_run(scene: str | None) -> Run:
+    """The ``Run`` of ``base_settings(scene)``."""
+    return validate(base_settings(scene))
+
+
+def differences(run: Run, scene: str | None) -> dict:
+    """Settings of ``run`` (URL names, values as ``applied`` gives them) that differ
+    from those of the scene (or the defaults) and change what is computed (not the
+    research settings, not the branch overlay)."""
+    now, base = applied(run), applied(base_run(scene))
+    return {s.name: now[s.name] for s in SETTINGS
+            if not s.display and s.affects and now[s.name] != base[s.name]}
+
+
 def to_query(run: Run, scene: str | None = None, display: Mapping | None = None) -> dict[str, str]:
-    """URL query arguments that restore ``run`` exactly, the scene it came from and the
+    """URL query arguments that restore ``run`` exactly: the scene it came from and the
+    settings that differ from that scene (without a scene, every setting), and the
     display settings that are not at their default."""
     q = {SCENE_NAME: scene} if scene else {}
+    now = applied(run)
+    base = applied(base_run(scene)) if scene else None
     for s in SETTINGS:
         if s.display:
             v = (display or {}).get(s.name, s.default)
             if v != s.default:
                 q[s.name] = ("1" if v else "0") if s.kind == "flag" else str(v)
             continue
+        if base is not None and now[s.name] == base[s.name] and not (
+                s.name in ("bif_min", "bif_max") and now["bif_param"] != base["bif_param"]):
+            continue                # (a link naming another parameter gets its own range)
         v = (getattr(run.params, s.name) if s.physical else
              run.psi if s.name == "psi" else getattr(run, s.name))
         if isinstance(v, bool):
             q[s.name] = "1" if v else "0"
         elif v is not None:
             q[s.name] = v if isinstance(v, str) else url_number(v)
+        elif base is not None:
+            q[s.name] = ""                  # emptied (x0 at the wall) where the scene has one
     return q
 
 
-def initial_settings(args: Mapping[str, object]) -> tuple[dict, list[str]]:
-    """Settings for a new session from its URL: good fields kept, bad ones replaced by
-    defaults; if the combination is still invalid, everything falls back to defaults."""
+#: Settings checked together: a refusal of the first may be the other's doing.
+_RELATED = {"t_record": ("t_end",), "bif_max": ("bif_min", "bif_param"),
+            "bif_min": ("bif_param",), "x0": ("g", "bif_max"), "map_y": ("map_x",)}
+
+
+def from_query(args: Mapping[str, object]) -> tuple[dict, str | None, list[str]]:
+    """Settings for a page from its URL: ``(values, scene, errors)``. A bad field is
+    refused alone (it keeps the scene's or the default value, with a message); the
+    good ones are kept. Never raises."""
     values, errors = parse_query(args)
-    try:
-        validate(values)
-    except ValueError as exc:
-        errors.append(str(exc) + " — using the default settings")
-        values = defaults()
+    scene = scene_of(args)
+    base = base_settings(scene)
+    for _ in range(len(QUERY_NAMES)):
+        try:
+            validate(values)
+            return values, scene, errors
+        except SettingsError as exc:
+            bad = {n for n in exc.fields if values.get(n) != base.get(n)}
+            if not bad:     # the field named holds its base value: the other one moved
+                bad = {m for n in exc.fields for m in _RELATED.get(n, ())
+                       if values.get(m) != base.get(m)}
+            if not bad:
+                break
+            errors.append(f"{exc} — using the {'scene' if scene else 'default'} value of "
+                          + ", ".join(sorted(bad)))
+            values.update({n: base[n] for n in bad})
+    errors.append("these settings do not fit together — using the "
+                  + ("scene's settings" if scene else "default settings"))
+    return dict(base), scene, errors
+
+
+def initial_settings(args: Mapping[str, object]) -> tuple[dict, list[str]]:
+    """Settings for a new session from its URL (see ``from_query``)."""
+    values, _, errors = from_query(args)
     return values, errors

@@ -6,6 +6,7 @@ import math
 import numpy as np
 import pytest
 
+from app import state
 from app.scenes import BY_KEY, SCENES
 
 
@@ -109,12 +110,33 @@ def test_bad_widget_input_keeps_the_last_scene(make_explorer):
     e = make_explorer()
     x, gen = e.displacement.source.data["x"], e.diagram.job.generation
     e.settings.m = -1.0
-    assert "m" in e.message and e.message_pane.visible
+    assert "m: -1 — must be > 0" in e.message and e.message_pane.visible
     assert e.displacement.source.data["x"] is x and e.diagram.job.generation == gen
+    assert e.settings.m == 1.0                        # the box shows what is applied
     e.settings.m = None                               # an emptied input box
-    assert "m" in e.message
-    e.settings.m = 1.0
-    assert e.message == "" and not e.message_pane.visible
+    assert "m: a value is required" in e.message and e.settings.m == 1.0
+    e.settings.m = 2.0
+    assert e.message == "" and not e.message_pane.visible and e.run.params.m == 2.0
+
+
+@pytest.mark.parametrize("name,value,allowed", [
+    ("omega", 0.0, "(0, 1000]"), ("omega", 1e6, "(0, 1000]"), ("r", 1.5, "[0, 1]"),
+    ("bif_n", 1, "[2, 2000]"), ("t_end", 1e9, "(0, 20000]")])
+def test_every_refused_value_is_named_with_its_range_and_the_box_shows_the_applied(
+        make_explorer, name, value, allowed):
+    e = make_explorer()
+    before = state.applied(e.run)
+    setattr(e.settings, name, value)
+    assert e.message.startswith(f"Not applied — {name}: {value:g} — ")
+    assert allowed in e.message
+    assert state.applied(e.run) == before and getattr(e.settings, name) == before[name]
+
+
+@pytest.mark.parametrize("name,value", [("omega", 20.0), ("omega", 1000.0), ("c", 100.0)])
+def test_values_the_core_accepts_are_applied_beyond_the_sliders(make_explorer, name, value):
+    e = make_explorer(t_end="20", t_record="10")
+    setattr(e.settings, name, value)
+    assert e.message == "" and getattr(e.run.params, name) == value
 
 
 def test_garbage_url_shows_message_and_defaults(make_explorer):

@@ -62,7 +62,7 @@ def test_validate_names_every_bad_field_at_once():
     with pytest.raises(ValueError) as exc:
         state.validate(values)
     text = str(exc.value)
-    for field in ("m=", "r=", "t_end", "method"):
+    for field in ("m: -1", "r: 2", "t_end", "method"):
         assert field in text
 
 
@@ -120,3 +120,71 @@ def test_scene_in_the_link_is_the_base_and_numbers_override_it():
     assert values == state.defaults() and errors and errors[0].startswith("scene:")
     run = state.validate(state.parse_query({"scene": "fig4"})[0])
     assert state.to_query(run, "fig4")["scene"] == "fig4"
+
+
+# -- the URL is the state ---------------------------------------------------------------
+
+from app.scenes import SCENES                                    # noqa: E402
+from app.settings import BY_NAME, QUERY_NAMES, SWEEP_RANGES       # noqa: E402
+
+
+def _text_for(name):
+    """Texts a link may carry for ``name``: its own kind of value, in and out of range,
+    and garbage."""
+    s = BY_NAME[name]
+    garbage = st.sampled_from(["", "nan", "inf", "-1e400", "banana", "1,5", "0x10", " 2 "])
+    if s.kind == "flag":
+        return st.one_of(st.sampled_from(["0", "1", "true", "off", "yes"]), garbage)
+    if s.kind == "choice":
+        return st.one_of(st.sampled_from(list(s.choices)), garbage)
+    numbers = st.floats(-1e4, 1e4, allow_nan=False) | st.integers(-10, 3000)
+    if s.soft:
+        numbers = numbers | st.floats(*s.soft)
+    if name in ("bif_min", "bif_max"):
+        numbers = numbers | st.floats(-1.0, 5.0)
+    return st.one_of(numbers.map(repr), numbers.map(lambda v: f"{v:.3g}"), garbage)
+
+
+QUERIES = st.fixed_dictionaries({}, optional={
+    **{n: _text_for(n) for n in QUERY_NAMES},
+    "scene": st.sampled_from([sc.key for sc in SCENES] + ["fig99", ""])})
+
+
+@hsettings(max_examples=300, deadline=None)
+@given(q=QUERIES)
+def test_any_link_shows_a_state_whose_url_reproduces_it(q):
+    """Whatever the query: the page shows a valid state, and the URL written for it gives
+    back that same state (settings, scene, display) and that same URL, with no error."""
+    values, scene, errors = state.from_query(q)
+    run = state.validate(values)                  # the state shown is always valid
+    display = {n: values[n] for n in state.DISPLAY_FIELDS}
+    url = state.to_query(run, scene, display)
+    values2, scene2, errors2 = state.from_query(url)
+    assert errors2 == [], (url, errors2)
+    run2 = state.validate(values2)
+    assert (run2, scene2) == (run, scene)
+    assert {n: values2[n] for n in state.DISPLAY_FIELDS} == display
+    assert state.to_query(run2, scene2, display) == url
+    # the boxes show the numbers computed with (no empty range after a parameter switch)
+    assert run.bif_min is not None and run.bif_max is not None
+
+
+def test_one_bad_field_in_a_link_is_refused_alone():
+    values, scene, errors = state.from_query({"omega": "2.5", "r": "5", "c": "0.1"})
+    run = state.validate(values)
+    assert (run.params.omega, run.params.r, run.params.c) == (2.5, 0.8, 0.1)
+    assert len(errors) == 1 and errors[0].startswith("r: 5 ") and "[0, 1]" in errors[0]
+    values, scene, errors = state.from_query({"scene": "fig6", "r": "-3", "omega": "2.7"})
+    run = state.validate(values)
+    assert (scene, run.params.r, run.params.omega) == ("fig6", 0.8, 2.7)
+
+
+def test_a_link_choosing_the_diagram_parameter_gets_its_range():
+    run = state.validate(state.from_query({"bif_param": "r"})[0])
+    assert (run.bif_min, run.bif_max) == SWEEP_RANGES["r"]
+
+
+def test_a_scene_link_carries_only_what_differs_from_the_scene():
+    run = state.validate({**state.base_settings("fig6"), "r": 0.6})
+    assert state.to_query(run, "fig6") == {"scene": "fig6", "r": "0.6"}
+    assert state.to_query(state.base_run("fig2"), "fig2") == {"scene": "fig2"}
