@@ -142,10 +142,27 @@ def _stability_readout(key: tuple) -> Readout:
     window = sol.t_end - sol.t_record
     budget = il.RunLimits(max_impacts=2 * sol.n_impacts + 1000, max_steps=2 * sol.nsteps + 10000)
     ly = lyapunov_from(p, tf, xf, vf, tf + window, tf, limits=budget)
-    verdict = VERDICTS.get(motion.kind, motion.label)
-    if ly.sticks and "sticks" not in verdict:
-        verdict += " — the motion sticks to the wall: its Jacobian vanishes, exponents −∞"
-    return Readout("exponents", verdict, lyapunov=ly)
+    return Readout("exponents", motion_verdict(motion, ly), lyapunov=ly)
+
+
+def motion_verdict(motion, ly) -> str:
+    """One line for a motion that is not periodic: ``il.classify``'s word (the short
+    form of "chaotic", and of "undetermined" when that is about λ₁ within its error),
+    then what the exponents shown are when they are not numbers (−∞, NaN)."""
+    if motion.kind == "chaotic" or (motion.kind == "undetermined"
+                                    and math.isfinite(motion.lyapunov)):
+        text = VERDICTS[motion.kind]
+    else:
+        text = motion.label
+    if ly.sticks:
+        if "sticks" not in text:
+            text += " — the motion sticks to the wall: its Jacobian vanishes, exponents −∞"
+    elif ly.unbounded:
+        if "unbounded" not in text:
+            text += " — the impact speed keeps growing: no exponents (NaN)"
+    elif not math.isfinite(float(ly.exponents[0])):
+        text += f" — no exponents: {ly.message}"
+    return text
 
 
 @pn.cache(max_items=64, policy="LRU", hash_funcs={il.Params: lambda p: repr(p).encode()})

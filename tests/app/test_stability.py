@@ -11,7 +11,7 @@ import pytest
 from scipy.optimize import brentq, root
 
 import impactlib as il
-from app import stability
+from app import stability, state
 
 # -- closed-form flight of the paper's oscillator (underdamped), written here ------------
 
@@ -263,3 +263,33 @@ def test_strip_of_an_up_and_down_sweep_has_both_chains(make_explorer):
     finite = np.isfinite(np.asarray(d["lyapunov"]))
     assert {c for c, f, s in zip(d["color"], finite, d["sweep"]) if f and s == 1} <= {"#1f5fa8"}
     assert {c for c, f, s in zip(d["color"], finite, d["sweep"]) if f and s == -1} <= {"#e08214"}
+
+
+def test_readout_of_a_sticking_motion_never_speaks_of_an_error_it_has_not():
+    """ω = 0.05: the window holds fewer than 4 periods and the motion sticks (λ = −∞):
+    the verdict says both, not "λ₁ within twice its error"."""
+    run = state.validate({**state.defaults(), "omega": 0.05})
+    r = stability.readout(run)
+    assert r.kind == "exponents" and r.lyapunov.sticks
+    assert "twice its error" not in r.verdict
+    assert "fewer than 4 periods" in r.verdict or "shorter than 4 periods" in r.verdict
+    assert "−∞" in r.verdict
+
+
+@pytest.mark.parametrize("kind,label,lam,unbounded,message,expect", [
+    ("unbounded", "unbounded (no dissipation): the impact speed grows every cycle",
+     math.nan, True, "", "unbounded (no dissipation)"),
+    ("chaotic", "chaotic (∞-impact period-∞)", 0.2, False, "", "chaotic: λ₁ is positive"),
+    ("undetermined", "undetermined (no Lyapunov exponent: stopped)", math.nan, False,
+     "stopped at max_impacts", "no exponents: stopped at max_impacts"),
+])
+def test_readout_verdict_for_every_status(kind, label, lam, unbounded, message, expect):
+    from types import SimpleNamespace
+
+    from impactlib.classify import Motion
+    motion = Motion(math.nan, math.nan, kind, label,
+                    lam if kind == "chaotic" else math.nan, 0.01)
+    ly = SimpleNamespace(sticks=False, unbounded=unbounded, exponents=np.array([lam, lam]),
+                         message=message)
+    text = stability.motion_verdict(motion, ly)
+    assert expect in text and "twice its error from 0" not in text
