@@ -10,7 +10,9 @@ from __future__ import annotations
 
 import logging
 
-from . import branches, diagram
+import numpy as np
+
+from . import branches, diagram, motion_classes
 from .jobs import Job
 from .settings import SYMBOLS
 
@@ -27,6 +29,10 @@ class SessionDiagram:
         self.branch_job = Job("branches",
                               lambda req, t: branches.branches_for(req[0], req[1], t),
                               dispatch, pool=branch_pool, on_result=self._branches_done)
+        self.class_job = Job("classes",
+                             lambda req, t: motion_classes.classify_values(
+                                 req[0], req[1], lambda: t.live),
+                             dispatch, pool=branch_pool, on_result=self._classes_done)
         self.run = None                   # the run the diagram is for
         self.parts: list[dict] = []       # its chunks so far (branch seeds)
         self.end = None                   # "complete", "partial (time limit)", "failed"
@@ -36,6 +42,7 @@ class SessionDiagram:
         """A new diagram for ``run``: views cleared, status "computing"; the job starts
         when ``start`` (a served page starts it once the page is up)."""
         self.run, self.parts, self.end = run, [], None
+        self.class_job.cancel()
         if run.branches:
             self.branch_job.cancel()
             for view in self._views:
@@ -66,6 +73,7 @@ class SessionDiagram:
     def cancel(self) -> None:
         self.job.cancel()
         self.branch_job.cancel()
+        self.class_job.cancel()
 
     # -- results (on the event loop) --------------------------------------------------------
 
@@ -96,6 +104,20 @@ class SessionDiagram:
         self.end = end
         if self._branches:
             self.show_branches(True)
+        if end == "complete" and motion_classes.classifiable(self.run):
+            values = np.unique(np.concatenate([p["values"] for p in self.parts]))
+            self.class_job.submit((self.run, values))
+        elif end == "complete":
+            for view in self._views:
+                view.diagram_classes(None, None)
+
+    def _classes_done(self, request, result) -> None:
+        if isinstance(result, Exception):     # never raise into Panel
+            log.warning("classes failed: %s: %s", type(result).__name__, result)
+            return
+        if result is not None:
+            for view in self._views:
+                view.diagram_classes(request[1], result)
 
     def _branches_done(self, request, result) -> None:
         if isinstance(result, Exception):     # never raise into Panel

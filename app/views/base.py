@@ -64,5 +64,9 @@ class View:
     def diagram_finished(self, text: str) -> None:
         """The diagram ended: "complete", "partial (time limit)" or "failed"."""
 
+    def diagram_classes(self, values, kinds) -> None:
+        """What ``il.classify`` calls the motion at each of the diagram's ``values``
+        (``app.motion_classes``); None: the sweep is not classified."""
+
     def connect(self, pick) -> None:
         """Gestures on the view may change settings through ``pick(**settings)``."""

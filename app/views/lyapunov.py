@@ -3,10 +3,13 @@ sharing its x axis (the same ``x_range`` object), filled in with the diagram's c
 one point per swept value and chain (a sweep up and down gives two, in the diagram's
 two colours).
 
-λ₁ > 0 marks chaos (a band of positive points), λ₁ < 0 a periodic attractor. A motion
-that sticks to the wall has λ₁ = −∞ and one whose exponent is undefined (unbounded
-growth, or a run stopped at a work limit) NaN: both are drawn at the bottom edge, as a
-downward triangle and a cross, and counted in the title, never dropped.
+λ₁ < 0 is a periodic attractor; λ₁ > 0 alone is not chaos: once the diagram is complete,
+each value is classified as ``il.classify`` does (``app.motion_classes``) and only the
+values it calls chaotic are drawn as chaos (red) and counted as such in the title, next to
+those it calls unbounded and undetermined. A motion that sticks to the wall has λ₁ = −∞
+and one whose exponent is undefined (unbounded growth, or a run stopped at a work limit)
+NaN: both are drawn at the bottom edge, as a downward triangle and a cross, and counted
+in the title, never dropped.
 """
 from __future__ import annotations
 
@@ -21,6 +24,7 @@ from .bifurcation import DOWN, UP
 STICKS = ("inverted_triangle", "#7a5195")   # λ₁ = −∞: off the bottom
 UNDEFINED = ("x", "#b35900")          # λ₁ NaN
 FINITE = ("circle", LINE)
+CHAOS = "#d1495b"                     # classify calls the motion chaotic
 #: Finite exponents in the diagram's colours: independent starts, sweep up, sweep down.
 SWEEP_COLORS = {0: LINE, 1: UP, -1: DOWN}
 
@@ -32,15 +36,18 @@ MIN_SPAN = 0.1
 def _empty() -> dict:
     return {"omega": np.zeros(0), "lyapunov": np.zeros(0), "y": np.zeros(0),
             "sweep": np.zeros(0, dtype=np.int8), "marker": [], "color": [],
-            "size": np.zeros(0)}
+            "size": np.zeros(0), "chaos": np.zeros(0, dtype=bool)}
 
 
-def strip_columns(values: np.ndarray, lam: np.ndarray, sweep: np.ndarray) -> tuple[dict, tuple]:
+def strip_columns(values: np.ndarray, lam: np.ndarray, sweep: np.ndarray,
+                  chaos: np.ndarray | None = None) -> tuple[dict, tuple]:
     """Columns of the strip (sorted by the swept value, then sweep up before down) and
     its y range: finite values as they are, -inf and NaN at the bottom edge with their
-    own marker. ``sweep``: the chain of each value (0 independent, +1 up, -1 down)."""
+    own marker. ``sweep``: the chain of each value (0 independent, +1 up, -1 down);
+    ``chaos``: values classify calls chaotic (drawn in CHAOS)."""
     order = np.lexsort((-sweep, values))
     x, lam, sweep = values[order], lam[order], sweep[order]
+    chaos = np.zeros(x.size, bool) if chaos is None else np.asarray(chaos, bool)[order]
     finite = np.isfinite(lam)
     lo, hi = padded(lam[finite], include=(-MIN_SPAN / 2, MIN_SPAN / 2))
     bottom = lo + 0.03 * (hi - lo)
@@ -48,9 +55,11 @@ def strip_columns(values: np.ndarray, lam: np.ndarray, sweep: np.ndarray) -> tup
     sticks = lam == -np.inf
     marker = np.where(finite, FINITE[0], np.where(sticks, STICKS[0], UNDEFINED[0]))
     tint = np.array([SWEEP_COLORS[int(d)] for d in sweep], dtype=object)
+    tint = np.where(chaos, CHAOS, tint)
     color = np.where(finite, tint, np.where(sticks, STICKS[1], UNDEFINED[1]))
     return ({"omega": x, "lyapunov": lam, "y": y, "sweep": sweep, "marker": marker.tolist(),
-             "color": color.tolist(), "size": np.where(finite, 3.0, 7.0)}, (lo, hi))
+             "color": color.tolist(), "size": np.where(finite, np.where(chaos, 5.0, 3.0), 7.0),
+             "chaos": chaos}, (lo, hi))
 
 
 #: Height (px) of the strip under the diagram, on screen and in presenter mode.
@@ -99,14 +108,39 @@ class LyapunovView(View):
         self.values.append(part["values"])
         self.exponents.append(part["lyapunov"])
         self.sweeps.append(part["sweep"])
+        self._draw(None)
+
+    def diagram_classes(self, values, kinds) -> None:
+        """classify's kind of each of ``values`` (None: the sweep is not classified)."""
+        if values is None:
+            self._draw(None, note="a sweep with warm starts is not classified")
+        else:
+            self._draw(dict(zip(np.asarray(values).tolist(), kinds)), classified=True)
+
+    def _draw(self, kinds: dict | None, classified: bool = False,
+              note: str = "not yet classified") -> None:
         values, lam = np.concatenate(self.values), np.concatenate(self.exponents)
-        data, (lo, hi) = strip_columns(values, lam, np.concatenate(self.sweeps))
+        kind = np.array([kinds.get(v, "") for v in values.tolist()] if kinds else
+                        [""] * values.size, dtype=object)
+        data, (lo, hi) = strip_columns(values, lam, np.concatenate(self.sweeps),
+                                       kind == "chaotic")
         self.source.data = data
         set_range(self.figure.y_range, lo, hi)
-        n = lam.size
-        chaos = int(np.count_nonzero(lam > 0))
-        sticks = int(np.count_nonzero(lam == -np.inf))
-        undefined = int(np.count_nonzero(np.isnan(lam)))
-        self.figure.title.text = (
-            f"Largest Lyapunov exponent λ₁: {chaos} of {n} values > 0 (chaos) · {sticks} "
-            f"stick (−∞, ▼ at the bottom) · {undefined} undefined (×)")
+        self.figure.title.text = strip_title(lam, kind, classified, note)
+
+
+def strip_title(lam: np.ndarray, kind: np.ndarray, classified: bool,
+                note: str = "not yet classified") -> str:
+    """The strip's title: classify's counts once classified, else the signs of λ₁."""
+    n = lam.size
+    sticks = int(np.count_nonzero(lam == -np.inf))
+    undefined = int(np.count_nonzero(np.isnan(lam)))
+    edge = f"{sticks} stick (−∞, ▼ at the bottom) · {undefined} undefined (×)"
+    if classified:
+        counts = {k: int(np.count_nonzero(kind == k))
+                  for k in ("chaotic", "unbounded", "undetermined")}
+        return (f"Largest Lyapunov exponent λ₁: {counts['chaotic']} of {n} values chaotic "
+                f"(as classify: λ₁ > 2× its error) · {counts['unbounded']} unbounded · "
+                f"{counts['undetermined']} undetermined · {edge}")
+    positive = int(np.count_nonzero(lam > 0))
+    return f"Largest Lyapunov exponent λ₁: {positive} of {n} values > 0 ({note}) · {edge}"

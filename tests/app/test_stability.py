@@ -293,3 +293,25 @@ def test_readout_verdict_for_every_status(kind, label, lam, unbounded, message, 
                          message=message)
     text = stability.motion_verdict(motion, ly)
     assert expect in text and "twice its error from 0" not in text
+
+
+def test_strip_marks_chaos_only_where_classify_calls_it(make_explorer):
+    """Undamped elastic r = 1, c = 0: λ₁ > 0 at most values, but classify calls many of
+    them unbounded or undetermined. The strip's chaos marks and its title count are
+    classify's on the same grid, start and window."""
+    e = make_explorer(r="1", c="0")
+    assert e.diagram.class_job.done.wait(120)
+    data = e.lyapunov.source.data
+    run = e.bifurcation.run
+    kinds = {}
+    for w in np.linspace(run.bif_min, run.bif_max, run.bif_n):
+        sol = il.simulate(run.params.replace(omega=float(w)), t_end=run.t_end,
+                          t_record=run.t_record, x0=run.x0, v0=run.v0)
+        kinds[float(w)] = il.classify(sol).kind
+    chaotic = sorted(w for w, k in kinds.items() if k == "chaotic")
+    assert sorted(np.asarray(data["omega"])[np.asarray(data["chaos"])].tolist()) == chaotic
+    lam = np.asarray(data["lyapunov"])
+    assert np.count_nonzero(lam > 0) > len(chaotic)     # λ₁ > 0 alone would say more
+    title = e.lyapunov.figure.title.text
+    assert f"{len(chaotic)} of {run.bif_n} values chaotic" in title, title
+    assert f"{sum(k == 'unbounded' for k in kinds.values())} unbounded" in title

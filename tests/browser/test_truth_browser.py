@@ -132,3 +132,26 @@ def test_display_toggles_leave_the_caption_alone(page, server):
     page.wait_for_function("() => location.search.includes('presenter=1')", timeout=10_000)
     page.wait_for_function("() => location.search.includes('branches=1')", timeout=10_000)
     assert text(page, "ie-caption") == "Paper defaults with ω = 2.5, bif_n = 40"
+
+
+def test_lyapunov_strip_counts_chaos_as_classify_does(page, server):
+    """r = 1, c = 0 on 100 values of ω: the strip's chaos (title and red points) is
+    classify's on the same grid, start and window, computed here."""
+    import numpy as np
+
+    import impactlib as il
+    open_app(page, server, "?r=1&c=0&bif_n=100")
+    page.wait_for_function("() => ie.title('lyapunov_figure').includes('chaotic')",
+                           timeout=60_000)
+    title = page.evaluate("ie.title('lyapunov_figure')")
+    red = page.evaluate("() => { const d = ie.data('lyapunov'); "
+                        "return d.omega.filter((w, i) => d.chaos[i]); }")
+    positive = page.evaluate("() => ie.data('lyapunov').lyapunov.filter((l) => l > 0).length")
+    p = il.Params(m=1.0, c=0.0, k=1.0, g=0.0, r=1.0, omega=2.0)
+    grid = np.linspace(0.1, 5.0, 100)
+    chaotic = [float(w) for w in grid
+               if il.classify(il.simulate(p.replace(omega=float(w)), t_end=500.0,
+                                          t_record=250.0)).kind == "chaotic"]
+    assert sorted(red) == chaotic
+    assert f"{len(chaotic)} of 100 values chaotic" in title, title
+    assert positive > len(chaotic)
