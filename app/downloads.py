@@ -17,7 +17,7 @@ import numpy as np
 import panel as pn
 
 from .research import attractor_text
-from .settings import SWEEP_RANGES
+from .settings import SWEEP_RANGES, method_options
 from .state import to_query
 
 #: Settings written at the top of every CSV file, by URL name.
@@ -72,6 +72,18 @@ def to_csv(columns: dict, run=None, extra: dict | None = None) -> io.StringIO:
     return buf
 
 
+def start_and_section(run) -> dict:
+    """Header lines of a scene's file beyond the physics: the start (x0 as used: empty
+    means at the wall, max(0, g)), the method's own options, and the section psi in
+    both units: time (``psi``, the URL's) and fraction of the period (``psi_over_T``,
+    the page's box)."""
+    x0 = run.x0 if run.x0 is not None else max(0.0, run.params.g)
+    out = {"psi": run.psi, "psi_over_T": run.psi_frac, "x0": x0, "v0": run.v0,
+           "method": run.method}
+    out.update(method_options(run, run.method))
+    return out
+
+
 class Downloads:
     """The download buttons of one session; ``session`` has ``run``, ``scene``,
     ``section`` and the ``bifurcation`` view."""
@@ -95,13 +107,15 @@ class Downloads:
     def impacts_csv(self) -> io.StringIO:
         self._name(0, "impacts")
         imp = self.session.scene.impacts
+        run = self.session.scene.run
         return to_csv({"t": imp["t"], "phase": imp["phase"], "v_before": imp["v"],
-                       "v_after": imp["v_after"]}, self.session.run)
+                       "v_after": imp["v_after"]}, run, start_and_section(run))
 
     def poincare_csv(self) -> io.StringIO:
         self._name(1, "poincare")
         s = self.session.section
-        return to_csv({"t": s["t"], "x": s["x"], "v": s["v"]}, self.session.run)
+        run = self.session.run
+        return to_csv({"t": s["t"], "x": s["x"], "v": s["v"]}, run, start_and_section(run))
 
     def bifurcation_csv(self) -> io.StringIO:
         self._name(2, "bifurcation")

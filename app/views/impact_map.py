@@ -41,6 +41,8 @@ class ImpactMapView(View):
         imp = scene.impacts
         self.source.data = {"phase": imp["phase"], "v": imp["v"], "t": imp["t"]}
         T = scene.run.params.T
-        set_range(self.figure.x_range, 0.0, T)
-        set_range(self.figure.y_range, *padded(imp["v"], include=(0.0,)))
+        # the axes hold the pinned points too (they stay in view after a jump)
+        pinned = {"phase": (), "v": ()} if self.pinned is None else self.pinned.data
+        set_range(self.figure.x_range, 0.0, max([T, *pinned["phase"]]))
+        set_range(self.figure.y_range, *padded(imp["v"], include=(0.0, *pinned["v"])))
         self.figure.title.text = f"Impact map, T = {T:.4g} s"

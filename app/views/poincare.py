@@ -41,9 +41,13 @@ class PoincareView(View):
         self.pinned.data = ({"x": self.source.data["x"], "v": self.source.data["v"]}
                             if on else {"x": [], "v": []})
 
+    def _pinned(self, col: str):
+        return () if self.pinned is None else self.pinned.data[col]
+
     def show_section(self, run: Run, section: dict) -> None:
         self._g = run.params.g
         self.source.data = {"x": section["x"], "v": section["v"], "t": section["t"]}
-        set_range(self.figure.x_range, *padded(section["x"]))
-        set_range(self.figure.y_range, *padded(section["v"]))
+        # the axes hold the pinned points too (they stay in view after a jump)
+        set_range(self.figure.x_range, *padded(section["x"], include=self._pinned("x")))
+        set_range(self.figure.y_range, *padded(section["v"], include=self._pinned("v")))
         self.figure.title.text = f"Poincaré map, ψ = {run.psi_frac:.3g} T"

@@ -195,8 +195,9 @@ def test_csv_files_start_with_the_settings_they_were_computed_with(make_explorer
             assert {"x0", "v0", "bif_param", "bif_sweep", "bif_n"} <= set(extra)
             assert got["method"] == "exact" and got["bif_param"] == "omega"
             got["method"] = "rk45"       # the scene's method, checked below
-        else:
-            assert extra == []
+        else:                # the start, the section as a fraction of T, rk45's options
+            assert extra == ["psi_over_T", "x0", "v0", "rtol", "atol"]
+            assert (float(got["x0"]), float(got["rtol"])) == (0.1, 1e-6)
         assert {n: float(got[n]) for n in ("m", "c", "k", "g", "r", "omega", "t_end",
                                            "t_record")} == {
             "m": 1.5, "c": 0.07, "k": 2.0, "g": 0.1, "r": 0.6, "omega": 2.81,
@@ -389,3 +390,30 @@ def test_tap_starts_the_motion_there(make_explorer, view_key):
     handler(SimpleNamespace(x=0.1, y=0.5))             # x < g = 0.25
     e.scene_job.done.wait(30)
     assert (e.run.x0, e.run.v0) == (0.25, 0.5)
+
+
+def test_pinned_maps_stay_in_view_when_the_axes_rescale(make_explorer):
+    """Pin at ω = 2, jump to ω = 0.2 (T ≈ 31 s, slow impacts): the rescaled axes still
+    hold every pinned point."""
+    e = make_explorer()
+    e.controls.pin_toggle.value = True
+    e.settings.omega = 0.2
+    e.scene_job.done.wait(30)
+    for view, (cx, cy) in ((e.impact_map, ("phase", "v")), (e.poincare, ("x", "v"))):
+        f, pinned = view.figure, view.pinned.data
+        assert len(pinned[cx]) > 0
+        assert f.x_range.start <= min(pinned[cx]) and max(pinned[cx]) <= f.x_range.end, view.key
+        assert f.y_range.start <= min(pinned[cy]) and max(pinned[cy]) <= f.y_range.end, view.key
+
+
+def test_scene_csvs_carry_the_start_and_the_section_in_both_units(make_explorer):
+    from app.downloads import read_header
+    e = make_explorer(omega="2.8", psi="0.3", x0="0.25", v0="-0.5")
+    T = 2 * math.pi / 2.8
+    for text in (e.downloads.impacts_csv().read(), e.downloads.poincare_csv().read()):
+        h = read_header(text)
+        assert (float(h["x0"]), float(h["v0"])) == (0.25, -0.5)
+        assert float(h["psi"]) == pytest.approx(0.3, rel=1e-9)              # time (s)
+        assert float(h["psi_over_T"]) == pytest.approx(0.3 / T, rel=1e-9)   # of the period
+    h = read_header(make_explorer(g="0.1").downloads.impacts_csv().read())
+    assert float(h["x0"]) == 0.1                    # empty x0: at the wall, max(0, g)

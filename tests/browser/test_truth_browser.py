@@ -155,3 +155,39 @@ def test_lyapunov_strip_counts_chaos_as_classify_does(page, server):
     assert sorted(red) == chaotic
     assert f"{len(chaotic)} of 100 values chaotic" in title, title
     assert positive > len(chaotic)
+
+
+def test_scene_csvs_hold_the_start_and_psi_in_both_units(page, server):
+    import math
+    from pathlib import Path
+
+    open_app(page, server, "?omega=2.8&psi=0.3&x0=0.25&v0=-0.5&bif_n=40")
+    page.get_by_text("Downloads", exact=True).click()
+    for label in ("Impacts (CSV)", "Poincaré points (CSV)"):
+        with page.expect_download(timeout=15_000) as info:
+            page.get_by_text(label).click()
+        lines = Path(info.value.path()).read_text().splitlines()
+        head = dict(line[2:].split(" = ", 1) for line in lines if line.startswith("# "))
+        assert (float(head["x0"]), float(head["v0"])) == (0.25, -0.5), head
+        assert abs(float(head["psi"]) - 0.3) < 1e-9
+        assert abs(float(head["psi_over_T"]) - 0.3 * 2.8 / (2 * math.pi)) < 1e-9
+
+
+RANGES_HOLD_PINNED = """() => [['impact_map', 'phase', 'v'], ['poincare', 'x', 'v']].every(
+  ([name, cx, cy]) => {
+    const f = ie.model(name + '_figure'), d = ie.data(name + '_pinned');
+    if (!d[cx].length) return false;
+    return Math.min(...d[cx]) >= f.x_range.start && Math.max(...d[cx]) <= f.x_range.end &&
+           Math.min(...d[cy]) >= f.y_range.start && Math.max(...d[cy]) <= f.y_range.end; })"""
+
+
+def test_pinned_maps_stay_in_view_after_a_jump(page, server):
+    open_app(page, server, "?bif_n=40")
+    page.get_by_role("button", name="Pin maps").click()
+    page.wait_for_function("() => ie.model('impact_map_pinned') && "
+                           "ie.data('impact_map_pinned').v.length > 0", timeout=10_000)
+    type_into(page, "omega", "0.2")                 # T ≈ 31 s, slow impacts
+    marker_at(page, 0.2)
+    page.wait_for_function("() => ie.title('impact_map_figure').includes('31.4')",
+                           timeout=15_000)
+    page.wait_for_function(RANGES_HOLD_PINNED, timeout=10_000)
