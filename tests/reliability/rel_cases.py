@@ -268,6 +268,9 @@ def _widget(settings_changes: dict, widget_changes: dict) -> Callable[[], Outcom
         if settings_changes:
             e.settings.param.update(**settings_changes)
             e.diagram.job.cancel()
+        # a refusal's message stays until the next change; the widgets already show the
+        # good values, so restoring them is no change: start each case without it
+        e.controls.clear_message()
         assert e.message == "", e.message
         before = _scene_data(e)
         try:
