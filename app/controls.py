@@ -17,9 +17,9 @@ import panel as pn
 from bokeh.layouts import column as bokeh_column
 import param
 
+from .captions import DEFAULT_CAPTION as CAPTION
 from .page_style import (CAPTION_CSS, CELL_CSS, CSS, GRID_CSS, LINE_CSS, MAIN_CSS,
                          MODAL_CSS, NOTE_CSS, PAGE_CSS, PNG_JS, SIDEBAR_CSS)
-from .captions import DEFAULT_CAPTION as CAPTION
 from .panel_fixes import GRID_COLUMN_CSS, PromptFloatSlider
 from .scenes import SCENES
 from .settings import ON_DIAGRAM, RESEARCH, SETTINGS

@@ -277,8 +277,9 @@ class Explorer(pn.viewable.Viewer):
 
     def _scene_done(self, run, result) -> None:
         if isinstance(result, Exception) and self.run is None:
-            # Nothing on screen yet (a link the core refuses): show the defaults.
-            self._message(f"Not applied — {result}. Showing the default settings.")
+            # Nothing on screen yet (a link the core refuses): the scene's or the defaults
+            base = "the scene's" if self._scene_key else "the default"
+            self._message(f"Not applied — {result}. Showing {base} settings.")
             self._restoring = True
             try:
                 self.settings.param.update(**state.base_settings(self._scene_key))
