@@ -17,7 +17,7 @@ import numpy as np
 
 import impactlib as il
 
-from .compute import scene_limits
+from .diagram import DIAGRAM_MAX_IMPACTS_PER_500S, DIAGRAM_MAX_STEPS_PER_500S
 from .state import Run
 
 #: Finished classifications kept for later sessions (keyed by Run.diagram_key()).
@@ -31,11 +31,16 @@ def classifiable(run: Run) -> bool:
 
 
 def classify_value(run: Run, value: float) -> str:
-    """``il.classify(...).kind`` of the diagram's run at ``value`` of ``run.bif_param``."""
+    """``il.classify(...).kind`` of the diagram's run at ``value`` of ``run.bif_param``,
+    within the diagram's own work ceilings; a run stopped at one (its λ₁ is NaN on the
+    strip) is "undetermined"."""
     p = run.params.replace(**{run.bif_param: float(value)})
+    scale = max(1.0, run.t_end / 500.0)
+    limits = il.RunLimits(max_impacts=int(DIAGRAM_MAX_IMPACTS_PER_500S * scale),
+                          max_steps=int(DIAGRAM_MAX_STEPS_PER_500S * scale))
     sol = il.simulate(p, t_end=run.t_end, t_record=run.t_record, x0=run.x0, v0=run.v0,
-                      method="exact", limits=scene_limits("exact"))
-    return il.classify(sol).kind
+                      method="exact", limits=limits)
+    return il.classify(sol).kind if sol.status == 0 else "undetermined"
 
 
 def classify_values(run: Run, values: np.ndarray, live=lambda: True) -> list[str] | None:
