@@ -441,7 +441,7 @@ def _check(event, name, stop, ds, max_points):
     elif ok_event and name == event.name:
         problems.append(f"name={name!r} is the event's own parameter; the second parameter "
                         "must be another one")
-    stop_f = math.nan
+    stop_f = None
     if isinstance(stop, bool):
         problems.append(f"stop={stop!r} is not a number")
     else:
@@ -449,9 +449,11 @@ def _check(event, name, stop, ds, max_points):
             stop_f = float(stop)
         except (TypeError, ValueError):
             problems.append(f"stop={stop!r} is not a number")
-    if stop_f == stop_f and not math.isfinite(stop_f):
+    if stop_f is None:
+        pass
+    elif not math.isfinite(stop_f):
         problems.append(f"stop={stop!r} is not finite")
-    elif math.isfinite(stop_f) and ok_event and name in PARAM_NAMES and name != event.name:
+    elif ok_event and name in PARAM_NAMES and name != event.name:
         start = getattr(event.params, name)
         if stop_f == start:
             problems.append(f"stop={stop_f!r} equals the start value {name}={start!r}")
