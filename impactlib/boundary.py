@@ -31,7 +31,8 @@ arclength, each a labelled point):
   grazing meeting a period-doubling or saddle-node; the curve goes on.  Another impact
   or flight reaching the wall, or the touch reaching an impact, or the touch losing its
   curvature, ends it (a codimension-two point).
-* turning points of the curve in either parameter ("fold in r").
+* turning points of the curve in either parameter ("fold in r"), and points where it
+  turns in both at once ("cusp", where two saddle-node curves meet).
 
 The curve ends at ``stop`` in the second parameter, at a closed edge of either
 parameter's valid range (both landed on exactly), at a codimension-two point, where the
@@ -684,9 +685,10 @@ def boundary(event, name: str, stop: float, *, ds: float | None = None,
                 if ye is not None:
                     found.append((float(t @ (ye - y)), f"fold in {pname}", ye))
         found.sort(key=lambda e: e[0])
+        found = _cusps(found)
         ended = False
         for _, key, ye in found:
-            if key.startswith("fold"):
+            if key.startswith("fold") or key == "cusp":
                 add(ye, key)
             elif key in ("period-doubling", "saddle-node"):
                 add(ye, f"grazing meets {key}")
@@ -723,6 +725,20 @@ def boundary(event, name: str, stop: float, *, ds: float | None = None,
         elif its >= 6:
             ds = max(h * 0.6, ds_min)
     return result(rows, points, message)
+
+
+def _cusps(found):
+    """Folds in both parameters at one point are a cusp of the curve in the plane (where
+    two saddle-node curves meet): one labelled point."""
+    out = []
+    for item in found:
+        if (out and item[1].startswith("fold") and out[-1][1].startswith("fold")
+                and item[1] != out[-1][1] and np.max(np.abs(item[2] - out[-1][2]))
+                <= 1e-6 * (1.0 + np.max(np.abs(item[2])))):
+            out[-1] = (out[-1][0], "cusp", out[-1][2])
+        else:
+            out.append(item)
+    return out
 
 
 def _passes(y0, ya, yb):

@@ -243,3 +243,29 @@ def test_csv_holds_the_curve_and_its_header(pd_upper):
     np.testing.assert_array_equal(df["r"], pd_upper.values[:, 1])
     np.testing.assert_array_equal(df["mu1_re"], pd_upper.multipliers[:, 0].real)
     np.testing.assert_array_equal(df["u1"], pd_upper.impact_velocities[:, 0])
+
+
+def test_contract_signature_result_fields_and_event_pickling(pd_upper):
+    import dataclasses
+    import inspect
+    import pickle
+    sig = inspect.signature(il.boundary)
+    assert [(q.name, q.kind.name, q.default) for q in sig.parameters.values()] == [
+        ("event", "POSITIONAL_OR_KEYWORD", inspect._empty),
+        ("name", "POSITIONAL_OR_KEYWORD", inspect._empty),
+        ("stop", "POSITIONAL_OR_KEYWORD", inspect._empty),
+        ("ds", "KEYWORD_ONLY", None), ("max_points", "KEYWORD_ONLY", 2000)]
+    names = {f.name for f in dataclasses.fields(il.Boundary)}
+    assert {"kind", "names", "values", "x", "v", "multipliers", "impact_velocities",
+            "points", "message"} <= names
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        pd_upper.kind = "saddle-node"
+    k = len(pd_upper.values)
+    assert pd_upper.values.shape == (k, 2) and pd_upper.multipliers.shape == (k, 2)
+    assert pd_upper.impact_velocities.shape == (k, 1) and pd_upper.x.shape == (k,)
+    # an event keeps what boundary needs through pickling (the process pools use it)
+    e = branch_events(PAPER, 5.0, "period-doubling")[0]
+    e2 = pickle.loads(pickle.dumps(e))
+    assert tuple(e2) == tuple(e) and (e2.name, e2.n, e2.phase) == ("omega", 1, 0.0)
+    np.testing.assert_array_equal(e2.impact_times, e.impact_times)
+    assert il.boundary(e2, "r", 0.6).values[-1, 0] == il.boundary(e, "r", 0.6).values[-1, 0]
