@@ -13,6 +13,7 @@ sessions (LRU by the request's key).  Nothing here knows about Panel.
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import logging
 import math
 import threading
@@ -104,8 +105,12 @@ def compute(req: BoundaryRequest, live=lambda: True):
     deadline = tic + WALL_TIME
     events = branch_events(req, live, deadline)
     lo, hi = SWEEP_RANGES[req.name_y]
-    jobs = [(e, stop) for e in events for stop in (lo, hi)
-            if stop != getattr(e.params, req.name_y)]
+    # kinds taken in turn, so that each shows early and a cut by the time bound leaves
+    # some curves of every kind
+    by_kind = [[(e, stop) for e in events if e.kind == kind for stop in (lo, hi)
+                if stop != getattr(e.params, req.name_y)] for kind in KINDS]
+    jobs = [job for group in itertools.zip_longest(*by_kind) for job in group
+            if job is not None]
     curves, done = [], 0
     yield BoundarySet((), 0, len(jobs), False, f"{len(events)} events to follow")
     for e, stop in jobs:

@@ -255,8 +255,8 @@ class ResearchPanel:
             return
         self._boundary_key = key
         self.boundary_job.cancel()
-        self.overlay.clear()
-        self.boundary_status.object = "" if req is None else "boundary curves: computing…"
+        self.overlay.clear("" if req is None else "computing…")
+        self.boundary_status.object = "" if req is None else self.overlay.legend()
         if req is not None:
             self.boundary_job.submit(req)
 
@@ -277,8 +277,8 @@ class ResearchPanel:
 
     def _boundaries_shown(self, curves) -> None:
         self.overlay.show(curves)
-        head = "boundary curves: " if curves.complete else "boundary curves: computing… "
-        self.boundary_status.object = head + curves.message
+        self.boundary_status.object = self.overlay.legend()
 
     def _boundaries_failed(self, text: str) -> None:
-        self.boundary_status.object = f"boundary curves not computed — {text}"
+        self.overlay.status = f"not computed — {text}"
+        self.boundary_status.object = self.overlay.legend()

@@ -1,7 +1,9 @@
 """The boundary curves drawn over the regime map: period-doubling, saddle-node and
 grazing curves (``app.boundaries``), one multi-line renderer per kind, coloured and
-dashed by kind, with a legend on the map's figure."""
+dashed by kind, with an HTML legend (and the computation's status) beside the map."""
 from __future__ import annotations
+
+import html
 
 from bokeh.models import ColumnDataSource
 
@@ -22,12 +24,24 @@ class BoundaryOverlay:
             colour, dash = STYLE[kind]
             figure.multi_line("xs", "ys", source=self.sources[kind], line_color=colour,
                               line_dash=dash, line_width=2.5, name=RENDERERS[kind],
-                              legend_label=kind, level="overlay")
-        figure.legend.location = "top_left"
-        figure.legend.background_fill_alpha = 0.7
-        figure.legend.label_text_font_size = "11px"
+                              level="overlay")
         self.status = ""
         self.curves: BoundarySet | None = None      # what is drawn
+
+    def legend(self) -> str:
+        """The kinds' line styles and the status, as HTML beside the map (the map's own
+        legend is HTML too, and a legend inside the figure would hide cells)."""
+        css = {"solid": "solid", "dashed": "dashed", "dotted": "dotted"}
+        rows = "".join(
+            f"<div><span style='display:inline-block;width:28px;vertical-align:middle;"
+            f"margin-right:6px;border-top:3px {css[STYLE[k][1]]} {STYLE[k][0]}'></span>"
+            f"{html.escape(k)} — {self._count(k)}</div>" for k in KINDS)
+        return (f"<div class='ie-legend' style='font-size:12px;margin-top:8px'>{rows}"
+                f"<div>{html.escape(self.status)}</div></div>")
+
+    def _count(self, kind: str) -> str:
+        n = len(self.sources[kind].data["xs"])
+        return f"{n} curve{'s' if n != 1 else ''}"
 
     def clear(self, status: str = "") -> None:
         for source in self.sources.values():
@@ -39,5 +53,5 @@ class BoundaryOverlay:
         for kind in KINDS:
             xs, ys = curves.lines(kind)
             self.sources[kind].data = {"xs": xs, "ys": ys}
-        self.status = curves.message
+        self.status = curves.message if curves.complete else f"computing… {curves.message}"
         self.curves = curves

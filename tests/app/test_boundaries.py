@@ -47,7 +47,8 @@ def test_switch_draws_the_three_kinds_and_a_settings_change_cancels(make_explore
     src = e.research.overlay.sources
     pd_lines = src["period-doubling"].data["xs"]
     assert len(pd_lines) >= 2 and len(src["grazing"].data["xs"]) >= 1
-    assert e.research.boundary_status.object.startswith("boundary curves: ")
+    legend = e.research.boundary_status.object
+    assert "period-doubling — " in legend and "curves from" in legend
     # the drawn period-doubling curves are those computed, and have the multiplier -1
     # there (the simulator's n-period map from the curve's orbit state)
     curves = [b for b in e.research.overlay.curves.curves if b.kind == "period-doubling"]
