@@ -86,6 +86,12 @@ class ResearchPanel:
             stop = pn.widgets.Button(label="Cancel", width=80, css_classes=[f"ie-{kind}-cancel"])
             stop.on_click(lambda event: self.cancel())
             self.buttons[kind] = button
+            if kind == MAP:       # the boundary curves' points (the switch sits in names)
+                curves_csv = pn.widgets.FileDownload(
+                    callback=lambda: self._downloads.boundaries_csv(
+                        self.overlay, self.views[MAP].request),
+                    filename="boundaries.csv", label="Curves CSV", width=100,
+                    css_classes=["ie-boundaries-csv"])
             save = pn.widgets.FileDownload(
                 callback=lambda v=view: getattr(self._downloads, f"{v.key}_csv")(v),
                 filename=f"{view.key}.csv", label="CSV", width=70,
@@ -100,6 +106,7 @@ class ResearchPanel:
             for n in names:             # (in the sidebar they would stretch; here not)
                 self._widgets[n].param.update(sizing_mode="fixed", width=150)
             controls = pn.Row(*(self._widgets[n] for n in names), button, stop, save,
+                              *([curves_csv] if kind == MAP else []),
                               sizing_mode="stretch_width")
             tabs.append((
                 "Regime map" if kind == MAP else "Basins",

@@ -44,6 +44,7 @@ from __future__ import annotations
 import io
 import math
 from dataclasses import dataclass, field
+from importlib.metadata import PackageNotFoundError, version
 
 import numpy as np
 
@@ -146,7 +147,7 @@ class Boundary:
                 h[n] = repr(getattr(self.params, n))
         h.update({"n": str(self.n), "impacts": str(self.impacts), "phase": repr(self.phase),
                   "points": "; ".join(f"{q.label} at row {q.index}" for q in self.points),
-                  "message": self.message})
+                  "message": self.message, "version": _version()})
         return h
 
     def to_csv(self) -> str:
@@ -169,6 +170,13 @@ class Boundary:
         df = pd.DataFrame(self.columns())
         df.attrs.update(self.header())
         return df
+
+
+def _version() -> str:
+    try:
+        return version("impact-explorer")
+    except PackageNotFoundError:
+        return "unknown"
 
 
 class _Curve:

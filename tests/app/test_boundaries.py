@@ -77,3 +77,25 @@ def test_switch_off_clears_and_on_again_uses_the_shared_result(make_explorer, fe
     assert e.research.boundary_job.done.wait(30)
     assert len(e.research.overlay.sources["period-doubling"].data["xs"]) == drawn
     assert "stopped" not in e.research.boundary_status.object
+
+
+def test_curves_download_as_csv_with_the_header(make_explorer, few_seeds):
+    import io
+
+    import pandas as pd
+
+    from app.downloads import read_header
+    e = make_explorer(map_n="8", boundaries="1")
+    e.research.compute(MAP)
+    assert e.research.job.done.wait(120) and e.research.boundary_job.done.wait(120)
+    text = e.downloads.boundaries_csv(e.research.overlay,
+                                      e.research.views[MAP].request).getvalue()
+    head = read_header(text)
+    assert (head["map_x"], head["map_y"]) == ("omega", "r") and head["c"] == "0.05"
+    curves = e.research.overlay.curves.curves
+    assert head["curve 0"].startswith(f"{curves[0].kind} of the {curves[0].orbit} orbit")
+    df = pd.read_csv(io.StringIO(text), comment="#")
+    for i, b in enumerate(curves):
+        rows = df[df["curve"] == i]
+        np.testing.assert_allclose(rows["omega"], b.values[:, 0], rtol=1e-9)
+        np.testing.assert_allclose(rows["r"], b.values[:, 1], rtol=1e-9, atol=1e-12)
