@@ -90,8 +90,8 @@ class ResearchPanel:
                 curves_csv = pn.widgets.FileDownload(
                     callback=lambda: self._downloads.boundaries_csv(
                         self.overlay, self.views[MAP].request),
-                    filename="boundaries.csv", label="Curves CSV", width=100,
-                    css_classes=["ie-boundaries-csv"])
+                    filename="boundaries.csv", label="Curves (CSV)", width=110,
+                    margin=(6, 10), css_classes=["ie-boundaries-csv"])
             save = pn.widgets.FileDownload(
                 callback=lambda v=view: getattr(self._downloads, f"{v.key}_csv")(v),
                 filename=f"{view.key}.csv", label="CSV", width=70,
@@ -106,14 +106,14 @@ class ResearchPanel:
             for n in names:             # (in the sidebar they would stretch; here not)
                 self._widgets[n].param.update(sizing_mode="fixed", width=150)
             controls = pn.Row(*(self._widgets[n] for n in names), button, stop, save,
-                              *([curves_csv] if kind == MAP else []),
                               sizing_mode="stretch_width")
             tabs.append((
                 "Regime map" if kind == MAP else "Basins",
                 pn.Column(controls, pn.Row(self.progress[kind], self.status[kind],
                                            sizing_mode="stretch_width"),
                           pn.Row(pn.pane.Bokeh(view.figure, sizing_mode="stretch_width"),
-                                 pn.Column(self.legend[kind], self.boundary_status)
+                                 pn.Column(self.legend[kind], self.boundary_status,
+                                           curves_csv)
                                  if kind == MAP else self.legend[kind],
                                  sizing_mode="stretch_width"),
                           sizing_mode="stretch_width")))

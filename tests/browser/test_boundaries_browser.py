@@ -1,9 +1,10 @@
 """The boundary curves over the regime map in headless Chromium: with ``boundaries=1`` the
 period-doubling, saddle-node and grazing renderers fill once the map is opened; the
 picture goes to docs/ for the README."""
+import time
 from pathlib import Path
 
-from test_app_browser import open_app
+from test_app_browser import open_app, text
 from test_research_browser import FILLED, wait_complete
 
 DOCS = Path(__file__).resolve().parents[2] / "docs"
@@ -21,6 +22,11 @@ def test_boundary_renderers_fill_over_the_regime_map(page, server):
     wait_complete(page, "ie-map-status")
     page.wait_for_function(HOLDS, arg=["boundary_pd", "boundary_sn", "boundary_grazing"],
                            timeout=90_000)
+    # the picture once the overlay is done (complete or cut by its time bound)
+    deadline = time.monotonic() + 90
+    while "curves from" not in (status := text(page, "ie-boundaries-status")):
+        assert time.monotonic() < deadline, status
+        page.wait_for_timeout(200)
     page.wait_for_timeout(500)
     page.locator(".ie-research").screenshot(path=str(DOCS / "boundaries.png"))
 

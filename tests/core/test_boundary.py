@@ -271,3 +271,17 @@ def test_contract_signature_result_fields_and_event_pickling(pd_upper):
     assert tuple(e2) == tuple(e) and (e2.name, e2.n, e2.phase) == ("omega", 1, 0.0)
     np.testing.assert_array_equal(e2.impact_times, e.impact_times)
     assert il.boundary(e2, "r", 0.6).values[-1, 0] == il.boundary(e, "r", 0.6).values[-1, 0]
+
+
+def test_period_two_doubling_curve_meets_the_continuation_at_r_03():
+    # period 2 -> 4 of the doubled branch at r = 0.6, followed to r = 0.3
+    e = branch_events(PAPER.replace(r=0.6), 3.0, "period-doubling")[0]
+    pd2 = branch_events(e.params, 3.0, "period-doubling", n=2, x0=e.x, v0=e.v)[0]
+    b = il.boundary(pd2, "r", 0.3)
+    assert b.n == 2 and b.impacts == 2 and b.values[-1, 1] == 0.3
+    for k in np.linspace(0, len(b.values) - 1, 6).astype(int):
+        mu = fd_map_multipliers(params_at(b, k), b.x[k], b.v[k], 2, b.phase, 2)
+        assert np.min(np.abs(mu + 1)) < 1e-6, (k, b.values[k], mu)
+    e3 = branch_events(PAPER.replace(r=0.3), 3.0, "period-doubling")[0]
+    ref = branch_events(e3.params, 3.0, "period-doubling", n=2, x0=e3.x, v0=e3.v)
+    assert abs(ref[0].value - b.values[-1, 0]) < 1e-8
