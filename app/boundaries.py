@@ -6,7 +6,7 @@ y parameter, found as ``app.branches`` finds the diagram's (the orbit a run from
 session's start settles on, at ``SEEDS`` values spread over the x range, continued over
 the whole range; a seed on a branch already found is skipped).  Each of their
 period-doubling, saddle-node and grazing events is followed in y to both ends of the y
-range.  The work is bounded (``WALL_TIME``, ``MAX_POINTS`` per curve), streamed curve by
+range, those next to a stable stretch of their branch (edges the map shows) first.  The work is bounded (``WALL_TIME``, ``MAX_POINTS`` per curve), streamed curve by
 curve, stopped between curves once no longer wanted, and complete sets are kept for all
 sessions (LRU by the request's key).  Nothing here knows about Panel.
 """
@@ -37,7 +37,7 @@ BRANCH_POINTS = 300
 MAX_POINTS = 800
 #: Largest move along a curve per step, as a share of the y range (a line on the map).
 STEP = 0.01
-WALL_TIME = 20.0
+WALL_TIME = 30.0
 CACHE_ITEMS = 16
 
 
@@ -95,8 +95,10 @@ def branch_events(req: BoundaryRequest, live, deadline) -> list:
                 key = (e.kind, b.n, b.impacts, round(e.value, 6))
                 if e.kind in KINDS and key not in seen:
                     seen.add(key)
-                    events.append(e)
-    return events
+                    # an event next to a stable stretch bounds a region the map shows
+                    near = b.stable[max(e.index - 1, 0):e.index + 2]
+                    events.append((not bool(np.any(near)), len(events), e))
+    return [e for _, _, e in sorted(events, key=lambda item: item[:2])]
 
 
 def compute(req: BoundaryRequest, live=lambda: True):

@@ -113,7 +113,7 @@ class ResearchPanel:
                                            sizing_mode="stretch_width"),
                           pn.Row(pn.pane.Bokeh(view.figure, sizing_mode="stretch_width"),
                                  pn.Column(self.legend[kind], self.boundary_status,
-                                           curves_csv)
+                                           curves_csv, width=270)
                                  if kind == MAP else self.legend[kind],
                                  sizing_mode="stretch_width"),
                           sizing_mode="stretch_width")))

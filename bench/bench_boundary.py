@@ -6,9 +6,10 @@ fixed r values as the curve has points, each locating the period-doublings.
 The lower curve starts at r = 1 on the period-doubling near omega = 1.255, turns in r
 near 0.636 and comes back to r = 1 near omega = 1.012: the curve that bends.  The upper
 one runs from r = 1 to r = 0 near omega = 2.65-2.76.  Medians after a warm-up, in one
-process.  Prints only.  ``--quick``: one repeat.
+process.  Prints only.  ``--quick``: one repeat; ``--overlay``: also the app's boundary
+overlay for the default regime map box (app.boundaries, without its time bound).
 
-    .venv/bin/python bench/bench_boundary.py [--quick]
+    .venv/bin/python bench/bench_boundary.py [--quick] [--overlay]
 """
 from __future__ import annotations
 
@@ -40,6 +41,8 @@ def timed(f, repeats):
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--overlay", action="store_true",
+                    help="also time the app's boundary overlay for the default map box")
     args = ap.parse_args()
     repeats = 1 if args.quick else 5
     p1 = PAPER.replace(r=1.0)
@@ -72,6 +75,26 @@ def main() -> None:
     t_alt, found = timed(by_branches, 1)
     print(f"  alternative: {len(r_values)} branches at fixed r, {t_alt:6.3f} s, "
           f"{found} period-doublings (x{t_alt / t_lower:.1f} the curve's time)")
+    if args.overlay:
+        overlay()
+
+
+def overlay() -> None:
+    """The app's boundary overlay for the default regime map box, without its time bound:
+    seconds to the first curve and to all of them (one run)."""
+    from app import boundaries, state
+    boundaries.WALL_TIME = float("inf")
+    run = state.validate(state.defaults())
+    req = boundaries.BoundaryRequest(run, run.map_x, run.map_y)
+    tic = time.perf_counter()
+    first, last = None, None
+    for last in boundaries.compute(req):
+        if first is None and last.curves:
+            first = time.perf_counter() - tic
+    total = time.perf_counter() - tic
+    print(f"app overlay, default box ({run.map_x} x {run.map_y}, {run.map_y} = "
+          f"{getattr(run.params, run.map_y):g} seeds): first curve {first:.2f} s, all "
+          f"{total:.2f} s; {last.message}")
 
 
 if __name__ == "__main__":
