@@ -6,14 +6,14 @@ y parameter, found as ``app.branches`` finds the diagram's (the orbit a run from
 session's start settles on, at ``SEEDS`` values spread over the x range, continued over
 the whole range; a seed on a branch already found is skipped).  Each of their
 period-doubling, saddle-node and grazing events is followed in y to both ends of the y
-range, those next to a stable stretch of their branch (edges the map shows) first.  The work is bounded (``WALL_TIME``, ``MAX_POINTS`` per curve), streamed curve by
+range: the first of each kind, then those next to a stable stretch of their branch
+(edges the map shows) before the others, short orbits before long ones.  The work is bounded (``WALL_TIME``, ``MAX_POINTS`` per curve), streamed curve by
 curve, stopped between curves once no longer wanted, and complete sets are kept for all
 sessions (LRU by the request's key).  Nothing here knows about Panel.
 """
 from __future__ import annotations
 
 import dataclasses
-import itertools
 import logging
 import math
 import threading
@@ -95,10 +95,11 @@ def branch_events(req: BoundaryRequest, live, deadline) -> list:
                 key = (e.kind, b.n, b.impacts, round(e.value, 6))
                 if e.kind in KINDS and key not in seen:
                     seen.add(key)
-                    # an event next to a stable stretch bounds a region the map shows
+                    # an event next to a stable stretch bounds a region the map shows;
+                    # short orbits are cheap and the map's broad regions
                     near = b.stable[max(e.index - 1, 0):e.index + 2]
-                    events.append((not bool(np.any(near)), len(events), e))
-    return [e for _, _, e in sorted(events, key=lambda item: item[:2])]
+                    events.append((not bool(np.any(near)), b.n * b.impacts, len(events), e))
+    return [item[-1] for item in sorted(events, key=lambda item: item[:3])]
 
 
 def compute(req: BoundaryRequest, live=lambda: True):
@@ -107,12 +108,13 @@ def compute(req: BoundaryRequest, live=lambda: True):
     deadline = tic + WALL_TIME
     events = branch_events(req, live, deadline)
     lo, hi = SWEEP_RANGES[req.name_y]
-    # kinds taken in turn, so that each shows early and a cut by the time bound leaves
-    # some curves of every kind
-    by_kind = [[(e, stop) for e in events if e.kind == kind for stop in (lo, hi)
-                if stop != getattr(e.params, req.name_y)] for kind in KINDS]
-    jobs = [job for group in itertools.zip_longest(*by_kind) for job in group
-            if job is not None]
+    # the first event of each kind, then the rest in order: every kind shows early,
+    # and a cut by the time bound leaves the map's main edges drawn
+    firsts = [next(e for e in events if e.kind == kind) for kind in KINDS
+              if any(e.kind == kind for e in events)]
+    ordered = firsts + [e for e in events if not any(e is f for f in firsts)]
+    jobs = [(e, stop) for e in ordered for stop in (lo, hi)
+            if stop != getattr(e.params, req.name_y)]
     curves, done = [], 0
     yield BoundarySet((), 0, len(jobs), False, f"{len(events)} events to follow")
     for e, stop in jobs:
