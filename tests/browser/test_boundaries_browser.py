@@ -18,12 +18,12 @@ HOLDS = """(names) => names.every((name) => {
 def test_boundary_renderers_fill_over_the_regime_map(page, server):
     open_app(page, server, "?omega=2.62&r=0.8&boundaries=1")
     page.get_by_text("Research: regime map and basins of attraction").click()
-    page.wait_for_function(FILLED, arg="regime_map", timeout=60_000)
-    wait_complete(page, "ie-map-status")
+    page.wait_for_function(FILLED, arg="regime_map", timeout=120_000)
+    wait_complete(page, "ie-map-status", timeout=120.0)
     page.wait_for_function(HOLDS, arg=["boundary_pd", "boundary_sn", "boundary_grazing"],
-                           timeout=90_000)
+                           timeout=120_000)
     # the picture once the overlay is done (complete or cut by its time bound)
-    deadline = time.monotonic() + 90
+    deadline = time.monotonic() + 120
     while "curves from" not in (status := text(page, "ie-boundaries-status")):
         assert time.monotonic() < deadline, status
         page.wait_for_timeout(200)
