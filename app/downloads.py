@@ -173,3 +173,28 @@ class Downloads:
             extra[f"attractor {k}"] = attractor_text(att)
         cols = {"x0": view.xs[ix], "v0": view.vs[iv], "attractor": view.image[iv, ix] - 1}
         return to_csv(cols, run, extra)
+
+    def boundaries_csv(self, overlay, request) -> io.StringIO:
+        """One row per point of every boundary curve drawn: the two parameters, the
+        curve's index, its kind's code and the orbit's state on the section (each curve's
+        kind, orbit type, condition and end in the header)."""
+        curves = overlay.curves.curves if overlay is not None and overlay.curves else ()
+        if request is None or not curves:
+            return io.StringIO("# no boundary curves computed yet\n")
+        run = request.run
+        kinds = ("period-doubling", "saddle-node", "grazing")
+        extra = {"method": "exact", "x0": run.x0, "v0": run.v0, "map_x": request.name_x,
+                 "map_y": request.name_y, "boundaries": overlay.status,
+                 "kinds": "; ".join(f"{k} {name}" for k, name in enumerate(kinds))}
+        cols = {request.name_x: [], request.name_y: [], "curve": [], "kind": [], "n": [],
+                "impacts": [], "x": [], "v": []}
+        for i, b in enumerate(curves):
+            extra[f"curve {i}"] = (f"{b.kind} of the {b.orbit} orbit ({b.condition}); "
+                                   f"{b.message}")
+            k = len(b.values)
+            for name, col in ((request.name_x, b.values[:, 0]), (request.name_y, b.values[:, 1]),
+                              ("curve", np.full(k, i)), ("kind", np.full(k, kinds.index(b.kind))),
+                              ("n", np.full(k, b.n)), ("impacts", np.full(k, b.impacts)),
+                              ("x", b.x), ("v", b.v)):
+                cols[name].append(col)
+        return to_csv({n: np.concatenate(c) for n, c in cols.items()}, run, extra)

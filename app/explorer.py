@@ -132,7 +132,7 @@ class Explorer(pn.viewable.Viewer):
     def _on_session_destroyed(self, session_context) -> None:
         """The tab is gone: stop its jobs and let the whole session be collected."""
         for job in (self.scene_job, self.window_job, self.accuracy_job, self.stability_job,
-                    self.research.job):
+                    self.research.job, self.research.boundary_job):
             job.cancel()
         self.diagram.cancel()
         self.compare.cancel()

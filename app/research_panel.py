@@ -16,7 +16,7 @@ import time
 
 import panel as pn
 
-from . import research
+from . import boundaries, research
 
 from .controls import NamedHTML
 from .jobs import Job
@@ -36,6 +36,9 @@ class ResearchPanel:
         self._widgets, self._current, self._pick = widgets, current, pick
         self._downloads = downloads
         self.job = Job("research", self._work, dispatch, pool=pool)
+        self.boundary_job = Job("boundaries", self._boundary_work, dispatch, pool=pool)
+        self.overlay = None                 # the boundary curves on the map, once built
+        self._boundary_key = None           # key of the curves asked for (None: none)
         self.views: dict = {}               # kind -> view, once built
         self.running: str | None = None     # kind being computed
         self._keys: dict = {}               # kind -> key of the request shown
@@ -63,13 +66,18 @@ class ResearchPanel:
         from .views.basins import BasinsView
         from .views.regime_map import RegimeMapView
         from .views._figure import share_helpers
+        from .views.boundaries import BoundaryOverlay
         self.views = {MAP: RegimeMapView(), BASINS: BasinsView()}
+        self.overlay = BoundaryOverlay(self.views[MAP].figure)
+        self.boundary_status = NamedHTML("", model_name="boundaries_status",
+                                         css_classes=["ie-boundaries-status"])
         share_helpers([v.figure for v in self.views.values()])
         for view in self.views.values():
             view.connect(self._pick)
         self.status, self.progress, self.legend, self.buttons = {}, {}, {}, {}
         tabs = []
-        for kind, label, names in ((MAP, "Compute regime map", ("map_x", "map_y", "map_n")),
+        for kind, label, names in ((MAP, "Compute regime map",
+                                    ("map_x", "map_y", "map_n", "boundaries")),
                                    (BASINS, "Compute basins", ("basins_n",))):
             view = self.views[kind]
             button = pn.widgets.Button(label=label, color="primary", width=170,
@@ -78,6 +86,12 @@ class ResearchPanel:
             stop = pn.widgets.Button(label="Cancel", width=80, css_classes=[f"ie-{kind}-cancel"])
             stop.on_click(lambda event: self.cancel())
             self.buttons[kind] = button
+            if kind == MAP:       # the boundary curves' points (the switch sits in names)
+                curves_csv = pn.widgets.FileDownload(
+                    callback=lambda: self._downloads.boundaries_csv(
+                        self.overlay, self.views[MAP].request),
+                    filename="boundaries.csv", label="Curves (CSV)", width=110,
+                    margin=(6, 10), css_classes=["ie-boundaries-csv"])
             save = pn.widgets.FileDownload(
                 callback=lambda v=view: getattr(self._downloads, f"{v.key}_csv")(v),
                 filename=f"{view.key}.csv", label="CSV", width=70,
@@ -98,7 +112,10 @@ class ResearchPanel:
                 pn.Column(controls, pn.Row(self.progress[kind], self.status[kind],
                                            sizing_mode="stretch_width"),
                           pn.Row(pn.pane.Bokeh(view.figure, sizing_mode="stretch_width"),
-                                 self.legend[kind], sizing_mode="stretch_width"),
+                                 pn.Column(self.legend[kind], self.boundary_status,
+                                           curves_csv, width=270)
+                                 if kind == MAP else self.legend[kind],
+                                 sizing_mode="stretch_width"),
                           sizing_mode="stretch_width")))
         self.tabs = pn.Tabs(*tabs, dynamic=True, sizing_mode="stretch_width")
         self.tabs.param.watch(lambda event: self._open(event.new), "active")
@@ -131,6 +148,8 @@ class ResearchPanel:
                                              run.basins_n)
         self.started(kind, request)
         self.job.submit((kind, request))
+        if kind == MAP:
+            self._draw_boundaries(run if run.boundaries else None)
 
     def cancel(self) -> None:
         self.job.cancel()
@@ -216,7 +235,12 @@ class ResearchPanel:
 
     def show_settings(self, run) -> None:
         """Say on a picture when the settings it depends on changed since it was made
-        (moving the marked point or the start does not count)."""
+        (moving the marked point or the start does not count); the boundary curves go
+        with the map shown while its settings hold and the switch is on."""
+        if self.overlay is not None and self.views[MAP].request is not None:
+            fresh = research.map_request(run).key() == self._keys.get(MAP)
+            self._draw_boundaries(self.views[MAP].request.run
+                                  if run.boundaries and fresh else None)
         for kind, view in self.views.items():
             req = view.request
             if req is None or self.running == kind:
@@ -227,3 +251,41 @@ class ResearchPanel:
                 now = dataclasses.replace(req, run=run).key()
             view.mark_stale(now != self._keys.get(kind))
 
+    # -- boundary curves over the map --------------------------------------------------------
+
+    def _draw_boundaries(self, run) -> None:
+        """Boundary curves of the map computed with ``run`` (None: none; a change of
+        request cancels the one under way)."""
+        req = None if run is None else boundaries.BoundaryRequest(run, run.map_x, run.map_y)
+        key = None if req is None else req.key()
+        if key == self._boundary_key:
+            return
+        self._boundary_key = key
+        self.boundary_job.cancel()
+        self.overlay.clear("" if req is None else "computing…")
+        self.boundary_status.object = "" if req is None else self.overlay.legend()
+        if req is not None:
+            self.boundary_job.submit(req)
+
+    def _boundary_work(self, req, ticket) -> None:
+        """Stream the boundary curves to the overlay, off the event loop."""
+        sets = boundaries.boundary_sets(req, live=lambda: ticket.live)
+        try:
+            for curves in sets:
+                ticket.send(self._boundaries_shown, curves)
+                if not ticket.live:
+                    break
+        except Exception as exc:     # a message under the legend, one log line
+            log.warning("boundaries failed: %s: %s", type(exc).__name__, exc)
+            ticket.send(self._boundaries_failed, f"{type(exc).__name__}: {exc}")
+        finally:
+            sets.close()
+        ticket.finish()
+
+    def _boundaries_shown(self, curves) -> None:
+        self.overlay.show(curves)
+        self.boundary_status.object = self.overlay.legend()
+
+    def _boundaries_failed(self, text: str) -> None:
+        self.overlay.status = f"not computed — {text}"
+        self.boundary_status.object = self.overlay.legend()

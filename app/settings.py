@@ -206,6 +206,11 @@ SETTINGS: tuple[Setting, ...] = (
     Setting("map_n", "regime map cells per side", 100,
             f"Grid of the regime map: n × n cells (2 … {MAP_N_MAX}).", frozenset(), RESEARCH,
             kind="integer", lo=2, hi=MAP_N_MAX, half=True),
+    Setting("boundaries", "boundary curves", False,
+            "Period-doubling, saddle-node and grazing curves of the periodic orbits in the "
+            "regime map's box, followed from the branches at the map's y value "
+            "(impactlib.boundary); drawn over the map (URL: boundaries=1).", frozenset(),
+            RESEARCH, widget="checkbox", kind="flag"),
     Setting("basins_n", "basins cells per side", 100,
             f"Grid of the basins picture: n × n starts (2 … {BASINS_N_MAX}).", frozenset(),
             RESEARCH, kind="integer", lo=2, hi=BASINS_N_MAX, half=True),

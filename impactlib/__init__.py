@@ -3,6 +3,7 @@
     m x'' + 2 c x' + k x = cos(omega t)   for x > g;   x'(t+) = -r x'(t-) at x = g
 """
 from .basins import Attractor, BasinRows, Basins, basins, iter_basins
+from .boundary import Boundary, BoundaryPoint, boundary
 from .classify import Motion, classify
 from .continuation import Branch, Event, continuation
 from .lyapunov import Lyapunov, lyapunov
@@ -17,4 +18,5 @@ __all__ = ["FIELDS", "METHODS", "PARAM_NAMES", "Params", "RunLimits", "rk4_stabi
            "Bifurcation", "RegimeMap", "bifurcation", "iter_bifurcation", "regime_map", "warmup",
            "PeriodicOrbit", "periodic_orbit", "Lyapunov", "lyapunov",
            "Branch", "Event", "continuation",
-           "Attractor", "BasinRows", "Basins", "basins", "iter_basins"]
+           "Attractor", "BasinRows", "Basins", "basins", "iter_basins",
+           "Boundary", "BoundaryPoint", "boundary"]

@@ -193,17 +193,24 @@ class Event(tuple):
     value : the continuation parameter at the event (located to ~1e-9).
     params : Params at the event; x, v : the orbit's state on the section there;
     multipliers : (2,) complex there; index : its position in the branch arrays.
+    name, n, phase : the branch's parameter, periods and section (None when built by hand).
+    impact_times, impact_velocities : (m,) the orbit's unknowns there (None when built by
+    hand); :func:`impactlib.boundary` starts from them.
     """
 
-    def __new__(cls, kind, value, params, x, v, multipliers, index):
+    def __new__(cls, kind, value, params, x, v, multipliers, index, name=None, n=None,
+                phase=None, impact_times=None, impact_velocities=None):
         obj = super().__new__(cls, (kind, float(value)))
         obj.kind, obj.value, obj.params = kind, float(value), params
         obj.x, obj.v, obj.multipliers, obj.index = float(x), float(v), multipliers, index
+        obj.name, obj.n, obj.phase = name, n, phase
+        obj.impact_times, obj.impact_velocities = impact_times, impact_velocities
         return obj
 
     def __reduce__(self):
         return (Event, (self.kind, self.value, self.params, self.x, self.v,
-                        self.multipliers, self.index))
+                        self.multipliers, self.index, self.name, self.n, self.phase,
+                        self.impact_times, self.impact_velocities))
 
 
 @dataclass(frozen=True)
@@ -574,7 +581,8 @@ def continuation(p: Params, name: str, stop: float, n: int = 1, x0: float | None
         for _, kind, ze in found:
             add(ze)
             zp, xe, ve, mue = pts[-1][0], pts[-1][1], pts[-1][2], pts[-1][3]
-            events.append(Event(kind, ze[-1], prob.params(ze[-1]), xe, ve, mue, len(pts) - 1))
+            events.append(Event(kind, ze[-1], prob.params(ze[-1]), xe, ve, mue, len(pts) - 1,
+                                name, n, float(phase), ze[:m].copy(), ze[m:2 * m].copy()))
             if kind == "grazing":
                 message = f"stopped at grazing, {name} = {ze[-1]:.10g}"
                 stop_here = True

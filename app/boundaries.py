@@ -1,0 +1,182 @@
+"""Boundary curves over the regime map's box: where period-doubling, saddle-node and
+grazing events of the periodic orbits lie in the map's two parameters (``il.boundary``).
+
+Seeds: the one-parameter branches in the map's x parameter at the current value of its
+y parameter, found as ``app.branches`` finds the diagram's (the orbit a run from the
+session's start settles on, at ``SEEDS`` values spread over the x range, continued over
+the whole range; a seed on a branch already found is skipped).  Each of their
+period-doubling, saddle-node and grazing events is followed in y to both ends of the y
+range: the first of each kind, then those next to a stable stretch of their branch
+(edges the map shows) before the others, short orbits before long ones.  The work is bounded (``WALL_TIME``, ``MAX_POINTS`` per curve), streamed curve by
+curve, stopped between curves once no longer wanted, and complete sets are kept for all
+sessions (LRU by the request's key).  Nothing here knows about Panel.
+"""
+from __future__ import annotations
+
+import dataclasses
+import logging
+import math
+import threading
+import time
+from collections import OrderedDict
+
+import numpy as np
+
+import impactlib as il
+
+from .branches import _follow, on_branch
+from .settings import SWEEP_RANGES
+from .stability import settled_orbit
+from .state import Run
+
+log = logging.getLogger(__name__)
+
+KINDS = ("period-doubling", "saddle-node", "grazing")
+SEEDS = 6
+BRANCH_POINTS = 300
+MAX_POINTS = 800
+#: Largest move along a curve per step, as a share of the y range (a line on the map).
+STEP = 0.01
+WALL_TIME = 30.0
+CACHE_ITEMS = 16
+
+
+@dataclasses.dataclass(frozen=True)
+class BoundaryRequest:
+    """The curves of ``run``'s periodic orbits in the box of ``name_x`` x ``name_y`` (their
+    default ranges, as the regime map's)."""
+
+    run: Run
+    name_x: str
+    name_y: str
+
+    def key(self) -> tuple:
+        """What the curves depend on: all but the x value (seeds span the x range)."""
+        r = self.run
+        p = dataclasses.replace(r.params, **{self.name_x: SWEEP_RANGES[self.name_x][0]})
+        return (p, self.name_x, self.name_y, r.x0, r.v0, r.t_end, r.t_record)
+
+
+@dataclasses.dataclass(frozen=True)
+class BoundarySet:
+    """Curves so far: ``curves`` a tuple of il.Boundary; ``done`` events followed of
+    ``total`` found; ``complete`` nothing was cut; ``message`` in words."""
+
+    curves: tuple
+    done: int
+    total: int
+    complete: bool
+    message: str
+
+    def lines(self, kind: str) -> tuple[list, list]:
+        """(xs, ys): one array pair per curve of ``kind``, for a multi-line renderer."""
+        picked = [b for b in self.curves if b.kind == kind and len(b.values) > 1]
+        return [b.values[:, 0] for b in picked], [b.values[:, 1] for b in picked]
+
+
+def branch_events(req: BoundaryRequest, live, deadline) -> list:
+    """The events of the branches in x at the current y, each kind/orbit/value once."""
+    run, name = req.run, req.name_x
+    lo, hi = SWEEP_RANGES[name]
+    found, events, seen = [], [], set()
+    for w in np.linspace(lo, hi, SEEDS + 2)[1:-1]:
+        if not live() or time.perf_counter() > deadline:
+            break
+        p = run.params.replace(**{name: float(w)})
+        orb, _ = settled_orbit(p, run.x0, run.v0, run.t_end, run.t_record)
+        if (orb is None or orb.sticks or not 0 < orb.impacts < math.inf
+                or on_branch(found, orb, name, float(w))):
+            continue
+        new = [_follow(p, name, stop, orb.n, orb.x, orb.v, BRANCH_POINTS) for stop in (lo, hi)]
+        new = [b for b in new if b is not None and b.param.size > 1]
+        found += new
+        for b in new:
+            for e in b.events:
+                key = (e.kind, b.n, b.impacts, round(e.value, 6))
+                if e.kind in KINDS and key not in seen:
+                    seen.add(key)
+                    # an event next to a stable stretch bounds a region the map shows;
+                    # short orbits are cheap and the map's broad regions
+                    near = b.stable[max(e.index - 1, 0):e.index + 2]
+                    events.append((not bool(np.any(near)), b.n * b.impacts, len(events), e))
+    return [item[-1] for item in sorted(events, key=lambda item: item[:3])]
+
+
+def compute(req: BoundaryRequest, live=lambda: True):
+    """Generator of ``BoundarySet`` (all curves so far), one after each curve."""
+    tic = time.perf_counter()
+    deadline = tic + WALL_TIME
+    events = branch_events(req, live, deadline)
+    lo, hi = SWEEP_RANGES[req.name_y]
+    # the first event of each kind, then the rest in order: every kind shows early,
+    # and a cut by the time bound leaves the map's main edges drawn
+    firsts = [next(e for e in events if e.kind == kind) for kind in KINDS
+              if any(e.kind == kind for e in events)]
+    ordered = firsts + [e for e in events if not any(e is f for f in firsts)]
+    jobs = [(e, stop) for e in ordered for stop in (lo, hi)
+            if stop != getattr(e.params, req.name_y)]
+    curves, done = [], 0
+    yield BoundarySet((), 0, len(jobs), False, f"{len(events)} events to follow")
+    for e, stop in jobs:
+        if not live() or time.perf_counter() > deadline:
+            break
+        done += 1
+        try:
+            b = il.boundary(e, req.name_y, stop, ds=STEP * (hi - lo), max_points=MAX_POINTS)
+        except ValueError as exc:      # e.g. a second parameter the event cannot take
+            log.info("boundary from %s not followed: %s", tuple(e), exc)
+            continue
+        curves.append(b)
+        yield BoundarySet(tuple(curves), done, len(jobs), False,
+                          f"{done} of {len(jobs)} curves")
+    complete = done == len(jobs) and live()
+    cut = "" if complete else " (stopped at the time bound)" if live() else " (cancelled)"
+    yield BoundarySet(tuple(curves), done, len(jobs), complete,
+                      f"{len(curves)} curves from {len(events)} events, "
+                      f"{time.perf_counter() - tic:.1f} s{cut}")
+
+
+class _Cache:
+    """Complete boundary sets by request key, least recently used dropped first."""
+
+    def __init__(self, max_items: int = CACHE_ITEMS):
+        self.max_items = max_items
+        self._items: OrderedDict = OrderedDict()
+        self._lock = threading.Lock()
+
+    def get(self, key):
+        with self._lock:
+            if key in self._items:
+                self._items.move_to_end(key)
+                return self._items[key]
+        return None
+
+    def put(self, key, value: BoundarySet) -> None:
+        if not value.complete:
+            return
+        with self._lock:
+            self._items[key] = value
+            self._items.move_to_end(key)
+            while len(self._items) > self.max_items:
+                self._items.popitem(last=False)
+
+    def clear(self) -> None:
+        with self._lock:
+            self._items.clear()
+
+
+CACHE = _Cache()
+
+
+def boundary_sets(req: BoundaryRequest, live=lambda: True):
+    """The curves of ``req`` as a stream of ``BoundarySet``: from the cache at once, or
+    computed (and kept once complete)."""
+    hit = CACHE.get(req.key())
+    if hit is not None:
+        yield hit
+        return
+    last = None
+    for last in compute(req, live):
+        yield last
+    if last is not None:
+        CACHE.put(req.key(), last)

@@ -1,0 +1,794 @@
+"""Boundary curves: an event of a branch followed in two parameters.
+
+An event of :func:`impactlib.continuation` (period-doubling, saddle-node, grazing) is a
+point of codimension one: in the plane of the branch's parameter and a second one it lies
+on a curve.  The unknowns are the branch's (impact times t_1..t_m, the velocities
+u_1..u_m just before them, see :mod:`impactlib.continuation`) plus both parameters; the
+2m equations of the multi-segment problem are joined by the event's defining condition,
+
+    period-doubling   phi_PD = (-1)^m [P (1 + det M) + tr M~] = 0    (|P| det(M + I))
+    saddle-node       phi_SN = (-1)^m [P (1 + det M) - tr M~] = 0    (|P| det(M - I))
+    grazing, impact   u_j = 0                      (the j-th impact has zero speed)
+    grazing, flight   x(t_j + s) = g, v(t_j + s) = 0     (flight j touches the wall at s,
+                                                          s one more unknown)
+
+(standard defining systems of codimension-one bifurcations, Kuznetsov, Elements of
+Applied Bifurcation Theory, 3rd ed., ch. 10), so 2m + 1 (+1) equations in 2m + 2 (+1)
+unknowns define a curve, followed by Keller's pseudo-arclength method as the branches
+are: predictor along the tangent, Newton on the equations plus the arclength condition,
+so the curve passes its folds in either parameter.  Derivatives: the multi-segment
+Jacobian is exact; the condition rows and the parameter columns are central differences.
+
+Watched along the curve (sign changes located by Illinois false position on the
+arclength, each a labelled point):
+
+* period-doubling and saddle-node curves: the orbit must stay admissible (every impact
+  speed above 0, every flight above the wall; the test of
+  :func:`impactlib.continuation`).  Where it stops being so, the event meets a grazing,
+  a codimension-two point, and the curve ends there.
+* grazing curves: the multipliers of the grazing orbit (the touch itself not counted:
+  the orbit on the side where it does not impact) through -1 or +1, labelled as the
+  grazing meeting a period-doubling or saddle-node; the curve goes on.  Another impact
+  or flight reaching the wall, or the touch reaching an impact, or the touch losing its
+  curvature, ends it (a codimension-two point).
+* turning points of the curve in either parameter ("fold in r"), and points where it
+  turns in both at once ("cusp", where two saddle-node curves meet).
+
+The curve ends at ``stop`` in the second parameter, at a closed edge of either
+parameter's valid range (both landed on exactly), at a codimension-two point, where the
+corrector fails with the smallest step, where it closes on itself, or after
+``max_points``; ``message`` says which.
+"""
+from __future__ import annotations
+
+import io
+import math
+from dataclasses import dataclass, field
+from importlib.metadata import PackageNotFoundError, version
+
+import numpy as np
+
+from ._jit import jit
+from .continuation import (Event, segments_clearance, segments_monodromy, segments_residual,
+                           segments_section)
+from .flight import G, R, flight_state, start_segment, system_constants
+from .model import FIELDS, MAGNITUDE_MAX, MAGNITUDE_MIN, PARAM_NAMES, Params
+from .tangent import flow_jacobian, saltation
+
+KINDS = ("period-doubling", "saddle-node", "grazing")
+NEWTON_TOL = 1e-11
+NEWTON_MAX = 8
+CLEARANCE_SAMPLES = 48
+COS_TURN = 0.995        # smallest cosine between successive tangents (about 5.7 degrees)
+MU_STEP = 0.2           # largest change of a multiplier per step on grazing curves
+MU_WATCH = 3.0
+ENDS_MARGIN = 1e-6      # minima this close (relative) to an impact or the touch are the touch
+
+
+@dataclass(frozen=True)
+class BoundaryPoint:
+    """A labelled point of a boundary curve: its start, a fold, a codimension-two point,
+    its end.  ``values`` = (first parameter, second parameter); ``index`` its row in the
+    curve's arrays."""
+
+    label: str
+    values: tuple
+    index: int
+
+
+@dataclass(frozen=True)
+class Boundary:
+    """Result of :func:`boundary`: one row per point along the curve (labelled points
+    included, in order).
+
+    kind : "period-doubling", "saddle-node" or "grazing".
+    names : (first, second) parameter names; values : (k, 2) their values.
+    x, v : (k,) the orbit's state on the section t = phase.
+    multipliers : (k, 2) complex, largest modulus first (on a grazing curve those of the
+        orbit on the side where the touch is no impact).
+    impact_times, impact_velocities : (k, m) the orbit's unknowns.
+    touch_times : (k,) where a grazing orbit touches the wall (nan on other curves).
+    points : tuple of :class:`BoundaryPoint`.  message : why the curve ended.
+    n, impacts, phase : the orbit type and its section; params : the event's parameters
+        (all but the two named stay fixed); condition : the defining condition in words.
+    """
+
+    kind: str
+    names: tuple
+    values: np.ndarray
+    x: np.ndarray
+    v: np.ndarray
+    multipliers: np.ndarray
+    impact_velocities: np.ndarray
+    points: tuple
+    message: str
+    n: int = 1
+    impacts: int = 0
+    phase: float = 0.0
+    params: Params | None = field(default=None, repr=False)
+    condition: str = ""
+    impact_times: np.ndarray | None = field(default=None, repr=False)
+    touch_times: np.ndarray | None = field(default=None, repr=False)
+
+    @property
+    def orbit(self) -> str:
+        """The orbit type, as the branches and the regime map name it."""
+        return f"{self.impacts}-impact period-{self.n}"
+
+    def __repr__(self):
+        a, b = self.names
+        lines = [f"Boundary({self.kind} of the {self.orbit} orbit in ({a}, {b}), "
+                 f"{len(self.values)} points, {self.condition})"]
+        lines += [f"  {q.label} at ({a}, {b}) = ({q.values[0]:.10g}, {q.values[1]:.10g})"
+                  for q in self.points]
+        lines.append(f"  {self.message}")
+        return "\n".join(lines)
+
+    def columns(self) -> dict:
+        """The curve as equally long named columns (parameters, state, multipliers,
+        impact unknowns)."""
+        cols = {self.names[0]: self.values[:, 0], self.names[1]: self.values[:, 1],
+                "x": self.x, "v": self.v}
+        for i in range(2):
+            cols[f"mu{i + 1}_re"] = self.multipliers[:, i].real
+            cols[f"mu{i + 1}_im"] = self.multipliers[:, i].imag
+        for j in range(self.impact_velocities.shape[1]):
+            cols[f"t{j + 1}"] = self.impact_times[:, j]
+            cols[f"u{j + 1}"] = self.impact_velocities[:, j]
+        cols["touch_t"] = self.touch_times
+        return cols
+
+    def header(self) -> dict:
+        """What the curve was computed with, for the ``# name = value`` lines of a CSV."""
+        h = {"kind": self.kind, "orbit": self.orbit, "condition": self.condition,
+             "param_x": self.names[0], "param_y": self.names[1]}
+        for n in PARAM_NAMES:
+            if n not in self.names:
+                h[n] = repr(getattr(self.params, n))
+        h.update({"n": str(self.n), "impacts": str(self.impacts), "phase": repr(self.phase),
+                  "points": "; ".join(f"{q.label} at row {q.index}" for q in self.points),
+                  "message": self.message, "version": _version()})
+        return h
+
+    def to_csv(self) -> str:
+        """The curve as CSV text: ``# name = value`` lines (both parameter names, the
+        event kind, the orbit type, the fixed parameters), a header row, one row per
+        point (17 significant digits).  ``pandas.read_csv(io.StringIO(text),
+        comment="#")`` reads it."""
+        cols = self.columns()
+        buf = io.StringIO()
+        for n, v in self.header().items():
+            buf.write(f"# {n} = {v}\n")
+        buf.write(",".join(cols) + "\n")
+        data = np.column_stack([np.asarray(c, dtype=float) for c in cols.values()])
+        np.savetxt(buf, data, delimiter=",", fmt="%.17g")
+        return buf.getvalue()
+
+    def to_frame(self):
+        """The curve as a pandas DataFrame (header in ``attrs``)."""
+        import pandas as pd
+        df = pd.DataFrame(self.columns())
+        df.attrs.update(self.header())
+        return df
+
+
+def _version() -> str:
+    try:
+        return version("impact-explorer")
+    except PackageNotFoundError:
+        return "unknown"
+
+
+class _Curve:
+    """The defining system of one curve: unknowns y = (t_1..t_m, u_1..u_m, [s], a, b)."""
+
+    def __init__(self, p: Params, names, n, m, phase, kind, touch):
+        self.p, self.names, self.n, self.m, self.phase = p, names, n, m, phase
+        self.kind, self.touch = kind, touch
+        self.q = 1 if touch is not None and touch[0] == "flight" else 0
+        self.nz = 2 * m + self.q + 2
+        self.F = np.empty(2 * m)
+        self.DF = np.empty((2 * m, 2 * m))
+        self._cache = {}
+        self.base = tuple(getattr(p, n) for n in PARAM_NAMES)
+
+    def params(self, lam) -> Params:
+        return self.p.replace(**{self.names[0]: float(lam[0]), self.names[1]: float(lam[1])})
+
+    def sp(self, lam):
+        key = (float(lam[0]), float(lam[1]))
+        got = self._cache.get(key)
+        if got is None:
+            # the bounds of Params' validation, without building one at every evaluation
+            for name, value in zip(self.names, key):
+                if not in_range(name, value):
+                    raise ValueError(f"{name}={value!r} is outside its valid range")
+            q = dict(zip(PARAM_NAMES, self.base))
+            q.update(zip(self.names, key))
+            got = (system_constants(q["m"], q["c"], q["k"], q["g"], q["r"], q["omega"]),
+                   self.n * 2.0 * math.pi / q["omega"])
+            if len(self._cache) > 16:
+                self._cache.clear()
+            self._cache[key] = got
+        return got
+
+    def clip(self, y):
+        """y with both parameters moved onto their closed edges if beyond them (projected
+        Newton: a solution inside the range is found from a step that overshoots)."""
+        for k, name in enumerate(self.names):
+            i = self.nz - 2 + k
+            f = FIELDS[name]
+            if f.lo is not None and not f.lo_open and y[i] < f.lo:
+                y[i] = f.lo
+            if f.hi is not None and y[i] > f.hi:
+                y[i] = f.hi
+        return y
+
+    def split(self, y):
+        m = self.m
+        return y[:m], y[m:2 * m], y[2 * m:2 * m + self.q]
+
+    def next_time(self, ts, total, j):
+        return ts[j + 1] if j + 1 < self.m else ts[0] + total
+
+    def touch_state(self, sp, ts, us, s):
+        """(x, v, a) of the touching flight at its unknown time s."""
+        j = self.touch[1]
+        seg = start_segment(sp, ts[j], sp[G], -sp[R] * us[j])
+        x, v, a, _, _, _ = flight_state(sp, seg, s)
+        return x, v, a
+
+    def conditions(self, sp, total, ts, us, s):
+        if self.touch is None:
+            a11, a12, a21, a22, P, det = segments_monodromy(sp, ts, us, total)
+            sgn = -1.0 if self.m % 2 else 1.0
+            tr = a11 + a22
+            phi = P * (1.0 + det) + (tr if self.kind == "period-doubling" else -tr)
+            return [sgn * phi]
+        if self.touch[0] == "impact":
+            return [us[self.touch[1]]]
+        x, v, _ = self.touch_state(sp, ts, us, s[0])
+        return [x - sp[G], v]
+
+    def residual(self, y):
+        sp, total = self.sp(y[-2:])
+        ts, us, s = self.split(y)
+        segments_residual(sp, ts, us, total, self.F, self.DF)
+        return np.concatenate([self.F, self.conditions(sp, total, ts, us, s)])
+
+    def jacobian(self, y):
+        """(H, DH): exact in (t, u) for the multi-segment rows, central differences for
+        the condition rows and for the extra and parameter columns."""
+        m2 = 2 * self.m
+        H = self.residual(y)
+        J = np.zeros((self.nz - 1, self.nz))
+        J[:m2, :m2] = self.DF
+        for i in range(self.nz):
+            param = i >= self.nz - 2
+            h = (1e-6 * max(1.0, abs(y[i]))) if param else 1e-7 * (1.0 + abs(y[i]))
+            yp = y.copy()
+            yp[i] += h
+            ym = y.copy()
+            ym[i] -= h
+            try:
+                hp = self.residual(yp)
+            except ValueError:       # at the edge of a parameter's valid range: one-sided
+                hp, yp = H, y
+            try:
+                hm = self.residual(ym)
+            except ValueError:
+                hm, ym = H, y
+            col = (hp - hm) / (yp[i] - ym[i])
+            if i < m2:
+                J[m2:, i] = col[m2:]
+            else:
+                J[:, i] = col
+        return H, J
+
+    def converged(self, H, J, y):
+        m2 = 2 * self.m
+        scale = 1.0 + np.max(np.abs(y))
+        grad = max(1.0, float(np.max(np.abs(J[m2:]))))
+        return (np.max(np.abs(H[:m2])) <= NEWTON_TOL * scale
+                and np.max(np.abs(H[m2:])) <= NEWTON_TOL * scale * grad)
+
+    def correct(self, y_pred, row, target):
+        """Newton on [H(y); row . y - target]; (y, iterations), y None on failure."""
+        y = y_pred.copy()
+        A = np.empty((self.nz, self.nz))
+        b = np.empty(self.nz)
+        J = None
+        for it in range(1, NEWTON_MAX + 1):
+            try:
+                H, J = self.jacobian(y)
+            except ValueError:
+                return None, it
+            A[:-1] = J
+            A[-1] = row
+            b[:-1] = H
+            b[-1] = row @ y - target
+            try:
+                dy = np.linalg.solve(A, -b)
+            except np.linalg.LinAlgError:
+                return None, it
+            if not np.all(np.isfinite(dy)):
+                return None, it
+            y = self.clip(y + dy)
+            if np.max(np.abs(dy)) <= 1e-12 * (1.0 + np.max(np.abs(y))):
+                try:
+                    H = self.residual(y)
+                except ValueError:
+                    return None, it
+                if self.converged(H, J, y):
+                    return y, it
+        try:
+            H = self.residual(y)
+        except ValueError:
+            return None, NEWTON_MAX
+        if J is not None and self.converged(H, J, y):
+            return y, NEWTON_MAX
+        return None, NEWTON_MAX
+
+    def tangent(self, y, t_prev=None):
+        _, J = self.jacobian(y)
+        qm, _ = np.linalg.qr(J.T, mode="complete")
+        t = qm[:, -1]
+        if t_prev is not None and float(t @ t_prev) < 0.0:
+            t = -t
+        return t / np.linalg.norm(t)
+
+    def monodromy(self, sp, ts, us, total):
+        """M of the orbit, the saltation of a zero-speed (touching) impact left out."""
+        skip = self.touch[1] if self.touch is not None and self.touch[0] == "impact" else -1
+        M = np.eye(2)
+        for j in range(self.m):
+            jn = j + 1 if j + 1 < self.m else 0
+            t1 = self.next_time(ts, total, j)
+            M = np.array(flow_jacobian(sp, t1 - ts[j])).reshape(2, 2) @ M
+            if jn != skip:
+                M = np.array(saltation(sp, t1, us[jn])).reshape(2, 2) @ M
+        return M
+
+    def wall(self, sp, ts, us, total, s):
+        """Lowest of: minus each impact speed, each flight's interior clearance; the
+        touch itself left out on a grazing curve."""
+        if self.touch is None:
+            return min(-float(np.max(us)),
+                       segments_clearance(sp, ts, us, total, CLEARANCE_SAMPLES))
+        kind, jt = self.touch
+        out = math.inf
+        for j in range(self.m):
+            if not (kind == "impact" and j == jt):
+                out = min(out, -float(us[j]))
+            t1 = self.next_time(ts, total, j)
+            seg = start_segment(sp, ts[j], sp[G], -sp[R] * us[j])
+            skip = s[0] if (kind == "flight" and j == jt) else math.nan
+            out = min(out, lowest_in_flight(sp, seg, t1 - ts[j], skip, CLEARANCE_SAMPLES)[0])
+        return out
+
+    def describe(self, y):
+        """(x, v, multipliers, touch time, tests) at a point of the curve."""
+        sp, total = self.sp(y[-2:])
+        ts, us, s = self.split(y)
+        x, v = segments_section(sp, ts, us, total, self.phase)
+        M = self.monodromy(sp, ts, us, total)
+        if np.all(np.isfinite(M)):
+            mu = np.linalg.eigvals(M).astype(complex)
+            mu = mu[np.argsort(-np.abs(mu), kind="stable")]
+        else:
+            mu = np.array([complex(math.inf), complex(0.0)])
+        tests = {"wall": self.wall(sp, ts, us, total, s)}
+        touch_t = math.nan
+        if self.touch is not None:
+            tr, det = float(np.trace(M)), float(np.linalg.det(M))
+            tests["period-doubling"] = 1.0 + tr + det
+            tests["saddle-node"] = 1.0 - tr + det
+            j = self.touch[1]
+            if self.touch[0] == "impact":
+                touch_t = float(ts[j])
+                # arriving with zero speed from above: x'' >= 0 there
+                seg = start_segment(sp, ts[j], sp[G], 0.0)
+                tests["curvature"] = flight_state(sp, seg, 0.0)[2]
+            else:
+                touch_t = float(ts[j] + s[0])
+                tests["curvature"] = self.touch_state(sp, ts, us, s[0])[2]
+                dur = self.next_time(ts, total, j) - ts[j]
+                # the touch merging with an impact ends the flight's grazing
+                tests["touch inside"] = min(s[0], dur - s[0]) - ENDS_MARGIN * dur
+        return x, v, mu, touch_t, tests
+
+
+@jit
+def lowest_in_flight(sp, seg, duration, skip, nsamp):
+    """(x - g, s) at the lowest interior minimum of a flight (inf when none), minima
+    within ENDS_MARGIN of its ends or of time ``skip`` (nan: none) left out."""
+    margin = ENDS_MARGIN * duration
+    h = duration / nsamp
+    best, where = math.inf, math.nan
+    vp = flight_state(sp, seg, 0.0)[1]
+    for i in range(1, nsamp + 1):
+        v = flight_state(sp, seg, i * h)[1]
+        if vp < 0.0 <= v:
+            lo, hi = (i - 1) * h, i * h
+            sm = 0.5 * (lo + hi)
+            for _ in range(60):        # bisection with Newton steps on v = 0
+                _, vm, am, _, _, _ = flight_state(sp, seg, sm)
+                if vm < 0.0:
+                    lo = sm
+                else:
+                    hi = sm
+                sn = sm - vm / am if am > 0.0 else 0.5 * (lo + hi)
+                if not (lo < sn < hi):
+                    sn = 0.5 * (lo + hi)
+                if abs(sn - sm) <= 1e-15 * (1.0 + duration):
+                    sm = sn
+                    break
+                sm = sn
+            near = sm < margin or sm > duration - margin or abs(sm - skip) < margin
+            xm = flight_state(sp, seg, sm)[0] - sp[G]
+            if not near and xm < best:
+                best, where = xm, sm
+        vp = v
+    return best, where
+
+
+def _check(event, name, stop, ds, max_points):
+    problems = []
+    ok_event = isinstance(event, Event) and event.impact_times is not None
+    if not isinstance(event, Event):
+        problems.append(f"event={event!r} is not an Event of impactlib.continuation(...).events")
+    elif event.impact_times is None:
+        problems.append(f"event={tuple(event)!r} carries no orbit (build it with "
+                        "impactlib.continuation)")
+    elif event.kind not in KINDS:
+        problems.append(f"event kind {event.kind!r} has no boundary curve here; expected one "
+                        f"of {', '.join(KINDS)}")
+        ok_event = False
+    if name not in PARAM_NAMES:
+        problems.append(f"name={name!r} is not a parameter; expected one of "
+                        f"{', '.join(PARAM_NAMES)}")
+    elif ok_event and name == event.name:
+        problems.append(f"name={name!r} is the event's own parameter; the second parameter "
+                        "must be another one")
+    stop_f = None
+    if isinstance(stop, bool):
+        problems.append(f"stop={stop!r} is not a number")
+    else:
+        try:
+            stop_f = float(stop)
+        except (TypeError, ValueError):
+            problems.append(f"stop={stop!r} is not a number")
+    if stop_f is None:
+        pass
+    elif not math.isfinite(stop_f):
+        problems.append(f"stop={stop!r} is not finite")
+    elif ok_event and name in PARAM_NAMES and name != event.name:
+        start = getattr(event.params, name)
+        if stop_f == start:
+            problems.append(f"stop={stop_f!r} equals the start value {name}={start!r}")
+        else:
+            try:
+                event.params.replace(**{name: stop_f})
+            except ValueError as err:
+                problems.append(f"stop={stop_f!r} is outside the valid range of {name} "
+                                f"({str(err).removeprefix('invalid parameters: ')})")
+    if ds is not None:
+        try:
+            dsf = float(ds)
+            if isinstance(ds, bool) or not (math.isfinite(dsf) and dsf > 0):
+                problems.append(f"ds={ds!r} must be a positive number")
+        except (TypeError, ValueError):
+            problems.append(f"ds={ds!r} must be a positive number")
+    if isinstance(max_points, bool) or not isinstance(max_points, (int, np.integer)) \
+            or max_points < 2:
+        problems.append(f"max_points={max_points!r} must be a whole number >= 2")
+    if problems:
+        raise ValueError("invalid boundary: " + "; ".join(problems))
+    return stop_f
+
+
+def _touch_of(event):
+    """Which grazing a grazing event is: ("impact", j) or ("flight", j, s)."""
+    p = event.params
+    sp = system_constants(p.m, p.c, p.k, p.g, p.r, p.omega)
+    ts = np.asarray(event.impact_times, dtype=float)
+    us = np.asarray(event.impact_velocities, dtype=float)
+    total = event.n * p.T
+    m = ts.size
+    j_imp = int(np.argmax(us))
+    best = (-float(us[j_imp]), ("impact", j_imp), None)
+    for j in range(m):
+        t1 = ts[j + 1] if j + 1 < m else ts[0] + total
+        seg = start_segment(sp, ts[j], p.g, -p.r * us[j])
+        low, s = lowest_in_flight(sp, seg, t1 - ts[j], math.nan, CLEARANCE_SAMPLES)
+        if abs(low) < abs(best[0]):
+            best = (low, ("flight", j), s)
+    return best[1], best[2]
+
+
+def in_range(name, value) -> bool:
+    """value lies in the valid range of parameter ``name`` (as Params checks it)."""
+    f = FIELDS[name]
+    if not (math.isfinite(value) and abs(value) <= MAGNITUDE_MAX):
+        return False
+    if f.lo is not None and (value < f.lo or (f.lo_open and value == f.lo)):
+        return False
+    if f.hi is not None and value > f.hi:
+        return False
+    return not (name in ("m", "omega") and value < MAGNITUDE_MIN)
+
+
+def _edges(name):
+    """Closed edges of a parameter's valid range (landed on exactly)."""
+    f = FIELDS[name]
+    out = []
+    if f.lo is not None and not f.lo_open:
+        out.append(f.lo)
+    if f.hi is not None:
+        out.append(f.hi)
+    return out
+
+
+def _condition_text(kind, touch):
+    if touch is None:
+        return "a multiplier at -1" if kind == "period-doubling" else "a multiplier at +1"
+    if touch[0] == "impact":
+        return f"impact {touch[1] + 1} at zero speed"
+    return f"flight {touch[1] + 1} touches the wall"
+
+
+def boundary(event, name: str, stop: float, *, ds: float | None = None,
+             max_points: int = 2000) -> Boundary:
+    """Follow a branch's event in the plane of its parameter and ``name``.
+
+    Pseudo-arclength continuation of the orbit's multi-segment unknowns plus the event's
+    defining condition (see the module notes), from the event towards ``stop`` in the
+    second parameter, through folds of the curve, with codimension-two points (the event
+    meeting a grazing; a grazing meeting a period-doubling or saddle-node) and folds
+    labelled in ``points``.
+
+    Parameters
+    ----------
+    event : Event
+        A period-doubling, saddle-node or grazing event from
+        ``impactlib.continuation(...).events``: its kind, parameter, orbit type, section
+        and parameters come with it.
+    name : one of "m", "c", "k", "g", "r", "omega", not the event's own parameter.
+    stop : float
+        Target value of the second parameter.
+    ds : float, optional
+        Largest move of the two parameters in one step (default |stop - start| / 200);
+        steps are smaller where the curve turns or the corrector labours.
+    max_points : int
+
+    Returns
+    -------
+    Boundary
+        ``values[:, 0]`` the event's parameter, ``values[:, 1]`` the second one.
+    """
+    stop = _check(event, name, stop, ds, max_points)
+    kind, names = event.kind, (event.name, name)
+    p = event.params
+    n, phase = int(event.n), float(event.phase)
+    ts0 = np.asarray(event.impact_times, dtype=float)
+    us0 = np.asarray(event.impact_velocities, dtype=float)
+    m = ts0.size
+    touch, s_touch = (None, None) if kind != "grazing" else _touch_of(event)
+    curve = _Curve(p, names, n, m, phase, kind, touch)
+    extra = [s_touch] if curve.q else []
+    lam0 = (event.value, getattr(p, name))
+    y = np.concatenate([ts0, us0, extra, lam0])
+    span = abs(stop - lam0[1])
+    # a step moves the parameters by at most ``plane`` (so that the curve is drawn smoothly
+    # in the plane) and the unknowns by at most ds_max; smaller where the curve turns
+    # (COS_TURN) or the corrector labours
+    plane = span / 200.0 if ds is None else float(ds)
+    ds = plane
+    ds_min = 1e-9 * max(1.0, span)
+    ds_max = 50.0 * plane
+    nz = curve.nz
+    unit = np.eye(nz)
+
+    def result(rows, points, message):
+        ys = np.array([r[0] for r in rows]) if rows else np.empty((0, nz))
+        return Boundary(
+            kind=kind, names=names, values=ys[:, -2:].copy(),
+            x=np.array([r[1] for r in rows]), v=np.array([r[2] for r in rows]),
+            multipliers=np.array([r[3] for r in rows]).reshape(-1, 2),
+            impact_velocities=ys[:, m:2 * m].copy(), points=tuple(points), message=message,
+            n=n, impacts=m, phase=phase, params=p, condition=_condition_text(kind, touch),
+            impact_times=ys[:, :m].copy(), touch_times=np.array([r[4] for r in rows]))
+
+    # the event is located to ~1e-9 on its branch: polish it at the start value of name
+    y1, _ = curve.correct(y, unit[-1], lam0[1])
+    if y1 is None:
+        return result([], [], "the corrector failed at the event: its defining condition "
+                              "is singular there")
+    y = y1
+    rows, points = [], []
+
+    def add(yp, label=None):
+        x, v, mu, touch_t, tests = curve.describe(yp)
+        rows.append((yp.copy(), x, v, mu, touch_t))
+        if label is not None:
+            points.append(BoundaryPoint(label, (float(yp[-2]), float(yp[-1])), len(rows) - 1))
+        return tests
+
+    tests_prev = add(y, "start")
+    t = curve.tangent(y)
+    if t[-1] * (stop - lam0[1]) < 0.0 or (t[-1] == 0.0 and t[-2] < 0.0):
+        t = -t
+    t_start, y_start = t.copy(), y.copy()
+    edges = [_edges(names[0]), [stop] + _edges(names[1])]
+    watched = ["wall"] if touch is None else [
+        "wall", "curvature", "period-doubling", "saddle-node"] + (
+        ["touch inside"] if curve.q else [])
+    message = f"reached max_points={max_points}"
+
+    def at(yp):
+        return f"({names[0]}, {names[1]}) = ({yp[-2]:.10g}, {yp[-1]:.10g})"
+
+    while len(rows) < max_points:
+        h = min(ds, plane / max(float(np.linalg.norm(t[-2:])), 1e-12))
+        y_pred = y + h * t
+        land = None
+        for k in (0, 1):
+            i = nz - 2 + k
+            for b in edges[k]:
+                if (y[i] - b) * (y_pred[i] - b) <= 0.0 and y[i] != b and t[i] != 0.0:
+                    frac = (b - y[i]) / (h * t[i])
+                    if land is None or frac < land[0]:
+                        land = (frac, i, b)
+        y_new = None
+        if land is not None:
+            frac, i, b = land
+            y_new, its = curve.correct(y + frac * h * t, unit[i], b)
+            if y_new is None:
+                # a curve that meets the edge tangentially is not landed on: step along it
+                land = None
+        if y_new is None:
+            y_new, its = curve.correct(curve.clip(y_pred), t, t @ y + h)
+        t_new = None
+        if y_new is not None:
+            try:
+                t_new = curve.tangent(y_new, t)
+            except ValueError:
+                y_new = None
+            else:
+                if float(t_new @ t) < COS_TURN and h > ds_min:
+                    y_new = None
+        if y_new is None:
+            if h <= ds_min:
+                try:
+                    curve.params(y[-2:] + ds_min * t[-2:])
+                    message = f"the corrector failed at the smallest step at {at(y)}"
+                except ValueError:
+                    message = f"reached the edge of the valid range at {at(y)}"
+                break
+            ds = max(0.5 * h, ds_min)
+            continue
+        x, v, mu, touch_t, tests = curve.describe(y_new)
+        if touch is not None and h > ds_min:
+            mu_prev = rows[-1][3]
+            if (np.max(np.abs(mu - mu_prev)) > MU_STEP
+                    and min(np.max(np.abs(mu)), np.max(np.abs(mu_prev))) < MU_WATCH):
+                ds = max(0.5 * h, ds_min)
+                continue
+        s_step = float(t @ (y_new - y))
+        found = []
+        for key in watched:
+            a, b = tests_prev.get(key, math.nan), tests.get(key, math.nan)
+            if math.isfinite(a) and math.isfinite(b) and (a > 0) != (b > 0) and a != 0.0:
+                ye = _locate(curve, y, t, s_step, lambda q, key=key: curve.describe(q)[4][key],
+                             a, b)
+                if ye is None and key not in ("period-doubling", "saddle-node"):
+                    ye = y_new      # not located (the corrector fails near it): the step's end
+                if ye is not None:
+                    found.append((float(t @ (ye - y)), key, ye))
+        for k, pname in enumerate(names):
+            i = nz - 2 + k
+            if t[i] * t_new[i] < 0.0:
+                ye = _locate(curve, y, t, s_step,
+                             lambda q, i=i: curve.tangent(q, t)[i], t[i], t_new[i])
+                if ye is not None:
+                    found.append((float(t @ (ye - y)), f"fold in {pname}", ye))
+        found.sort(key=lambda e: e[0])
+        found = _cusps(found)
+        ended = False
+        for _, key, ye in found:
+            if key.startswith("fold") or key == "cusp":
+                add(ye, key)
+            elif key in ("period-doubling", "saddle-node"):
+                add(ye, f"grazing meets {key}")
+            else:
+                what = {"wall": f"{kind} meets grazing" if touch is None else "double grazing",
+                        "curvature": "degenerate grazing (no curvature at the touch)",
+                        "touch inside": "the touch reaches an impact"}[key]
+                add(ye, what)
+                message = f"ended at a codimension-two point: {what} at {at(ye)}"
+                ended = True
+                break
+        if ended:
+            break
+        tests_prev = add(y_new)
+        if land is not None:
+            i, b = land[1], land[2]
+            pname = names[i - (nz - 2)]
+            if i == nz - 1 and b == stop:
+                message = f"reached {pname} = {stop:g}"
+                points.append(BoundaryPoint("end", (float(y_new[-2]), float(y_new[-1])),
+                                            len(rows) - 1))
+            else:
+                message = f"reached the edge of the valid range of {pname} ({pname} = {b:g})"
+                points.append(BoundaryPoint(f"edge of {pname}", (float(y_new[-2]),
+                                                                 float(y_new[-1])),
+                                            len(rows) - 1))
+            break
+        if len(rows) > 3 and _passes(y_start, y, y_new) and float(t_new @ t_start) > 0.9:
+            message = f"the curve closed on itself at {at(y_start)}"
+            break
+        y, t = y_new, t_new
+        if its <= 3:
+            ds = min(h * 1.4, ds_max)
+        elif its >= 6:
+            ds = max(h * 0.6, ds_min)
+    return result(rows, points, message)
+
+
+def _cusps(found):
+    """Folds in both parameters at one point are a cusp of the curve in the plane (where
+    two saddle-node curves meet): one labelled point."""
+    out = []
+    for item in found:
+        if (out and item[1].startswith("fold") and out[-1][1].startswith("fold")
+                and item[1] != out[-1][1] and np.max(np.abs(item[2] - out[-1][2]))
+                <= 1e-6 * (1.0 + np.max(np.abs(item[2])))):
+            out[-1] = (out[-1][0], "cusp", out[-1][2])
+        else:
+            out.append(item)
+    return out
+
+
+def _passes(y0, ya, yb):
+    """The step from ya to yb passes within a quarter of its length of y0."""
+    d = yb - ya
+    L2 = float(d @ d)
+    if L2 == 0.0:
+        return False
+    w = min(1.0, max(0.0, float((y0 - ya) @ d) / L2))
+    return float(np.linalg.norm(ya + w * d - y0)) < 0.25 * math.sqrt(L2)
+
+
+def _locate(curve, y0, t0, s_hi, test, f_lo, f_hi):
+    """The point of the step (y0, t0, arclength s_hi) where ``test`` is zero: Illinois
+    false position in the arclength."""
+    lo, hi = 0.0, s_hi
+    y_best = None
+    side = 0
+    for _ in range(60):
+        s = (lo * f_hi - hi * f_lo) / (f_hi - f_lo) if f_hi != f_lo else 0.5 * (lo + hi)
+        if not (lo < s < hi):
+            s = 0.5 * (lo + hi)
+        y, _ = curve.correct(y0 + s * t0, t0, t0 @ y0 + s)
+        if y is None:
+            s = 0.5 * (lo + hi)
+            y, _ = curve.correct(y0 + s * t0, t0, t0 @ y0 + s)
+            if y is None:
+                break
+        fs = test(y)
+        y_best = y
+        if fs == 0.0 or not math.isfinite(fs):
+            break
+        if (fs > 0) == (f_lo > 0):
+            lo, f_lo = s, fs
+            if side == 1:
+                f_hi *= 0.5
+            side = 1
+        else:
+            hi, f_hi = s, fs
+            if side == -1:
+                f_lo *= 0.5
+            side = -1
+        if hi - lo <= 1e-11 * (1.0 + abs(s_hi)):
+            break
+    return y_best

@@ -1,0 +1,101 @@
+"""Boundary curves over the regime map without a browser: the switch, the three renderers,
+cancelling when the map's settings change, the shared result, the URL name.
+
+Reference: each drawn period-doubling curve is checked at spread points by central
+differences of the simulator's n-period map (a multiplier at -1), independent of
+il.boundary's equations."""
+import numpy as np
+import pytest
+
+import impactlib as il
+from app import boundaries, state
+from app.research_panel import MAP
+
+
+@pytest.fixture
+def few_seeds(monkeypatch):
+    monkeypatch.setattr(boundaries, "SEEDS", 2)        # seeds at omega = 1.73 and 3.37
+    boundaries.CACHE.clear()
+    yield
+    boundaries.CACHE.clear()
+
+
+def fd_multipliers(p, x, v, n, h=1e-6):
+    def f(x, v):
+        sol = il.simulate(p, t_end=n * p.T, t_record=0.0, x0=x, v0=v)
+        return np.array(sol.final[1:3])
+    J = np.column_stack([(f(x + h, v) - f(x - h, v)) / (2 * h),
+                         (f(x, v + h) - f(x, v - h)) / (2 * h)])
+    return np.linalg.eigvals(J)
+
+
+def test_url_name_and_default():
+    assert state.validate(state.defaults()).boundaries is False
+    run = state.validate({**state.defaults(), "boundaries": True})
+    assert run.boundaries is True and state.to_query(run)["boundaries"] == "1"
+    assert state.initial_settings({"boundaries": "1"})[0]["boundaries"] is True
+
+
+def test_switch_draws_the_three_kinds_and_a_settings_change_cancels(make_explorer,
+                                                                   few_seeds):
+    e = make_explorer(map_n="8", boundaries="1")
+    e.research.compute(MAP)
+    assert e.research.job.done.wait(120) and e.research.boundary_job.done.wait(120)
+    fig = e.research.views[MAP].figure
+    names = {r.name for r in fig.renderers}
+    assert {"boundary_pd", "boundary_sn", "boundary_grazing"} <= names
+    src = e.research.overlay.sources
+    pd_lines = src["period-doubling"].data["xs"]
+    assert len(pd_lines) >= 2 and len(src["grazing"].data["xs"]) >= 1
+    legend = e.research.boundary_status.object
+    assert "period-doubling — " in legend and "curves from" in legend
+    # the drawn period-doubling curves are those computed, and have the multiplier -1
+    # there (the simulator's n-period map from the curve's orbit state)
+    curves = [b for b in e.research.overlay.curves.curves if b.kind == "period-doubling"]
+    assert [len(xs) for xs in pd_lines] == [len(b.values) for b in curves if len(b.values) > 1]
+    for b in curves:
+        for k in np.linspace(0, len(b.values) - 1, 5).astype(int)[1:-1]:
+            p = b.params.replace(omega=b.values[k, 0], r=b.values[k, 1])
+            mu = fd_multipliers(p, b.x[k], b.v[k], b.n)
+            assert np.min(np.abs(mu + 1)) < 1e-6, (b.values[k], mu)
+    # a setting of the map changes: the curves go, the job is cancelled
+    generation = e.research.boundary_job.generation
+    e.settings.c = 0.06
+    assert e.research.boundary_job.generation > generation
+    assert all(len(s.data["xs"]) == 0 for s in src.values())
+    assert e.research.boundary_status.object == ""
+
+
+def test_switch_off_clears_and_on_again_uses_the_shared_result(make_explorer, few_seeds):
+    e = make_explorer(map_n="8", boundaries="1")
+    e.research.compute(MAP)
+    assert e.research.job.done.wait(120) and e.research.boundary_job.done.wait(120)
+    drawn = len(e.research.overlay.sources["period-doubling"].data["xs"])
+    e.settings.boundaries = False
+    assert all(len(s.data["xs"]) == 0 for s in e.research.overlay.sources.values())
+    e.settings.boundaries = True
+    assert e.research.boundary_job.done.wait(30)
+    assert len(e.research.overlay.sources["period-doubling"].data["xs"]) == drawn
+    assert "stopped" not in e.research.boundary_status.object
+
+
+def test_curves_download_as_csv_with_the_header(make_explorer, few_seeds):
+    import io
+
+    import pandas as pd
+
+    from app.downloads import read_header
+    e = make_explorer(map_n="8", boundaries="1")
+    e.research.compute(MAP)
+    assert e.research.job.done.wait(120) and e.research.boundary_job.done.wait(120)
+    text = e.downloads.boundaries_csv(e.research.overlay,
+                                      e.research.views[MAP].request).getvalue()
+    head = read_header(text)
+    assert (head["map_x"], head["map_y"]) == ("omega", "r") and head["c"] == "0.05"
+    curves = e.research.overlay.curves.curves
+    assert head["curve 0"].startswith(f"{curves[0].kind} of the {curves[0].orbit} orbit")
+    df = pd.read_csv(io.StringIO(text), comment="#")
+    for i, b in enumerate(curves):
+        rows = df[df["curve"] == i]
+        np.testing.assert_allclose(rows["omega"], b.values[:, 0], rtol=1e-9)
+        np.testing.assert_allclose(rows["r"], b.values[:, 1], rtol=1e-9, atol=1e-12)
