@@ -35,6 +35,7 @@ from .classify import MAX_PERIOD, classify, describe
 from .flight import FA, OM
 from .model import Params, RunLimits
 from .simulate import run_constants, run_kernel, simulate
+from impactlib.io.result import SweepResult
 
 SETTLE_RTOL = 1e-6         # settling tolerance, relative to the grid's scale (see _scale)
 ROUND_RTOL = 1e-10         # error floor: rounding accumulated over an orbit's flights and
@@ -335,13 +336,17 @@ class BasinRows:
     message: str
 
 
-@dataclass(frozen=True)
-class Basins:
+@dataclass(frozen=True, repr=False, eq=False)
+class Basins(SweepResult):
     """Result of :func:`basins`.
 
     ``labels[i, j]`` is the attractor (index into ``attractors``) that the start
     (x[j], v[i]) at t0 = phase settles on; -1 undecided.  ``fractions[a]`` is the share of
     all nx * nv cells in the basin of attractor a; ``undecided`` the share of -1.
+    ``x`` (nx,) and ``v`` (nv,) are the grid of starts (length, length per time unit),
+    ``phase`` the section (s), ``periods`` (nv, nx) the forcing periods followed per start,
+    ``complete`` False when a time limit stopped it, ``elapsed`` seconds (not part of
+    ``==``), ``attractors`` the :class:`Attractor` found, in order of discovery.
     """
 
     params: Params

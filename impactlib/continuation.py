@@ -55,6 +55,7 @@ from .flight import G, K, M, OM, R, C_, flight_state, start_segment, system_cons
 from .model import Params
 from .orbits import check_start, periodic_orbit
 from .tangent import flow_jacobian
+from impactlib.io.result import SweepResult
 
 NEWTON_TOL = 1e-11
 NEWTON_MAX = 8
@@ -206,8 +207,8 @@ class Event(tuple):
                         self.multipliers, self.index))
 
 
-@dataclass(frozen=True)
-class Branch:
+@dataclass(frozen=True, repr=False, eq=False)
+class Branch(SweepResult):
     """Result of :func:`continuation`: one entry per point along the branch (located
     events included, in order).
 
@@ -216,6 +217,9 @@ class Branch:
     events : list of :class:`Event`, each a (kind, value) pair.
     impact_times, impact_velocities : (k, m) the unknowns of each point.
     message : why the branch ended.
+    name : the continued parameter; n : forcing periods per orbit; impacts : impacts per
+        orbit; phase : the section (s).  start : the PeriodicOrbit the branch started from
+        (its ``params`` are the fixed parameters).
     """
 
     name: str

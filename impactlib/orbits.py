@@ -16,6 +16,7 @@ import numpy as np
 from .model import PARAM_NAMES, Params, RunLimits
 from .simulate import run_constants, simulate
 from .tangent import tangent_run
+from impactlib.io.result import Result
 
 NEWTON_MAX = 40
 NEWTON_TOL = 1e-11          # residual, relative to the orbit's size (and 1)
@@ -23,8 +24,8 @@ SETTLE_TIME = 250.0         # the paper's transient
 IMPACT_CAP = 4096
 
 
-@dataclass(frozen=True)
-class PeriodicOrbit:
+@dataclass(frozen=True, repr=False, eq=False)
+class PeriodicOrbit(Result):
     """Result of :func:`periodic_orbit`.
 
     x, v : the orbit's state on the section t = phase (mod T).
@@ -36,6 +37,9 @@ class PeriodicOrbit:
     converged, residual : Newton's outcome; max |P^n(z) - z| at the returned point.
     sticks : the orbit rests on the wall for a while in each cycle.
     impact_times, impact_velocities : the impacts of one cycle from t = phase (v < 0).
+    label : the paper's "m-impact period-n" name.  iterations : Newton steps taken.
+    message : Newton's outcome in words.  jacobian : (2, 2) of the n-period map.
+    params : Params.  Units: x length, v length per time unit, times s.
     """
 
     params: Params

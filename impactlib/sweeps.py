@@ -25,6 +25,7 @@ from .events import step_caps
 from .flight import G, OM, system_constants_rows
 from .model import PARAM_NAMES, Params, RunLimits, check_run, fastest_rate, rk4_stability_limits
 from .simulate import METHOD_IDS, run_kernel, section_times, simulate
+from impactlib.io.result import SweepResult
 
 CAP_PER_VALUE = 4096        # impacts kept per value; more are counted, flagged in status
 _POOL_LOCK = threading.Lock()
@@ -126,9 +127,33 @@ def rows_kernel(sps, method, x0s, v0s, t_end, t_record, hmaxs, rates, dt, rtol, 
             classes[i, 1] = n
 
 
-@dataclass(frozen=True)
-class Bifurcation:
-    """Impacts of a sweep, one row per recorded impact (aligned 1-D arrays)."""
+@dataclass(frozen=True, repr=False, eq=False)
+class Bifurcation(SweepResult):
+    """Impacts of a sweep, one row per recorded impact (aligned 1-D arrays).
+
+    Attributes
+    ----------
+    name : str
+        The swept parameter.
+    values : ndarray, shape (N,)
+        The swept values, in the order given (units of ``name``).
+    param, v, t, phase, index, direction : ndarray, shape (R,)
+        One row per recorded impact: the swept value, the velocity just before impact
+        (<= 0), the impact time from its run's start (s), t mod T (s), the index into
+        ``values``, and +1 / -1 for a warm-started sweep up / down (0 independent).
+    status : ndarray of int, shape (N,)
+        Per value: 0 ok, 1 impact limit, 2 step limit, 3 more impacts than kept.
+    n_impacts : ndarray of int, shape (N,)
+        Per value: impacts in the record window, kept or not.
+    elapsed : float
+        Seconds (not part of ``==``).
+    lyapunov : ndarray, shape (N,) or None
+        Per value: largest Lyapunov exponent (1/s) with ``lyapunov=True``.
+    params : Params or None
+        The fixed parameters (``name`` takes each value in turn).
+    options : dict
+        The run settings: t_end, t_record, method, x0, v0, warm_start, ...
+    """
 
     name: str
     values: np.ndarray        # the swept values, in the order run
@@ -142,15 +167,23 @@ class Bifurcation:
     n_impacts: np.ndarray     # per value: impacts in the window (kept or not)
     elapsed: float
     lyapunov: np.ndarray | None = None   # per value: largest Lyapunov exponent (lyapunov=True)
+    params: Params | None = None
+    options: dict = dataclasses.field(default_factory=dict)
 
     def __len__(self):
         return self.param.shape[0]
 
 
-@dataclass(frozen=True)
-class RegimeMap:
+@dataclass(frozen=True, repr=False, eq=False)
+class RegimeMap(SweepResult):
     """(m, n) class of each cell of a two-parameter grid; -1 stands for infinity, -2 for
     undetermined (window too short), 0 impacts for no impact, m = -3 not settled.
+
+    ``values_x`` (nx,) and ``values_y`` (ny,) are the grid of ``name_x`` and ``name_y``;
+    ``impacts`` (m), ``period`` (n) and ``status`` (as in :class:`Bifurcation`) are
+    (ny, nx) integer arrays, row iy and column ix for (values_y[iy], values_x[ix]);
+    ``elapsed`` seconds (not part of ``==``); ``params`` the fixed parameters and
+    ``options`` the run settings (t_end, t_record, method, x0, v0, ...).
 
     Cells whose section points never repeat are judged by :func:`classify` on their own
     run (the Lyapunov criterion): ``motions[(iy, ix)]`` holds its verdict, and their codes
@@ -167,6 +200,8 @@ class RegimeMap:
     status: np.ndarray        # (ny, nx)
     elapsed: float
     motions: dict = dataclasses.field(default_factory=dict)   # (iy, ix) -> classify's Motion
+    params: Params | None = None
+    options: dict = dataclasses.field(default_factory=dict)
 
     def motion(self, iy: int, ix: int) -> Motion:
         got = self.motions.get((int(iy), int(ix)))
@@ -435,7 +470,21 @@ def bifurcation(p: Params, name: str, values, t_end: float = 500.0, t_record: fl
 
         run_jobs(sps, hmaxs, rates, x0s, np.full(n, v0), on_block=collect, workers=workers,
                  **common)
-    return merge_parts(name, values, parts, time.perf_counter() - tic)
+    return dataclasses.replace(
+        merge_parts(name, values, parts, time.perf_counter() - tic), params=p,
+        options=sweep_options(t_end=t_end, t_record=t_record, method=method, x0=x0, v0=v0,
+                              warm_start=warm_start, dt=dt, rtol=rtol, atol=atol))
+
+
+def sweep_options(**kw) -> dict:
+    """The settings a sweep records (its ``options``): the step or the tolerances only
+    for the method that uses them."""
+    if kw.get("method") != "rk4":
+        kw.pop("dt", None)
+    if kw.get("method") != "rk45":
+        kw.pop("rtol", None)
+        kw.pop("atol", None)
+    return kw
 
 
 class _Done:
@@ -520,4 +569,6 @@ def regime_map(p: Params, name_x: str, values_x, name_y: str, values_y,
                               dt=dt, rtol=rtol, atol=atol, max_impacts=max_impacts,
                               max_steps=max_steps)
     return RegimeMap(name_x, vx, name_y, vy, impacts, period, status, time.perf_counter() - tic,
-                     motions)
+                     motions, params=p,
+                     options=sweep_options(t_end=t_end, t_record=t_record, method=method,
+                                           x0=x0, v0=v0, dt=dt, rtol=rtol, atol=atol))
