@@ -12,11 +12,14 @@ from .orbits import PeriodicOrbit, periodic_orbit
 from .model import FIELDS, METHODS, PARAM_NAMES, Params, RunLimits, rk4_stability_limit
 from .simulate import Impacts, Samples, Solution, simulate
 from .sweeps import Bifurcation, RegimeMap, bifurcation, iter_bifurcation, regime_map
+from .streaming import iter_regime_map
 from .warmup import warmup
+from . import io  # impactlib.io.read_csv, write_csv
 
 __all__ = ["__version__", "FIELDS", "METHODS", "PARAM_NAMES", "Params", "RunLimits", "rk4_stability_limit",
            "Impacts", "Samples", "Solution", "simulate", "Motion", "classify",
-           "Bifurcation", "RegimeMap", "bifurcation", "iter_bifurcation", "regime_map", "warmup",
+           "Bifurcation", "RegimeMap", "bifurcation", "iter_bifurcation", "regime_map",
+           "iter_regime_map", "warmup",
            "PeriodicOrbit", "periodic_orbit", "Lyapunov", "lyapunov",
            "Branch", "Event", "continuation",
            "Attractor", "BasinRows", "Basins", "basins", "iter_basins"]

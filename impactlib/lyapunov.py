@@ -45,7 +45,7 @@ class Lyapunov(Result):
     nu : impacts per unit time in the window.
     window : (t_record, t_end).
     sticks, unbounded : the two cases above.
-    status : the run's status (as :class:`impactlib.Solution`).
+    status : the run's status (as :class:`impactlib.Solution`).  params : Params.
     final : (t, x, v, stuck) where the run stopped.
     message : what the numbers mean or why they are missing.
     """

@@ -396,7 +396,8 @@ def bifurcation(p: Params, name: str, values, t_end: float = 500.0, t_record: fl
                 warm_start: bool | str = False, dt: float | None = None, rtol: float = 1e-6,
                 atol: float = 1e-9, workers: int | None = None,
                 cap_per_value: int = CAP_PER_VALUE, max_impacts: int = 1_000_000,
-                max_steps: int = 20_000_000, lyapunov: bool = False) -> Bifurcation:
+                max_steps: int = 20_000_000, lyapunov: bool = False, progress=None,
+                cancel=None) -> Bifurcation:
     """Impact velocities against one parameter (the paper's Fig. 3).
 
     Parameters
@@ -422,6 +423,11 @@ def bifurcation(p: Params, name: str, values, t_end: float = 500.0, t_record: fl
         Also the largest Lyapunov exponent of each value over [t_record, t_end], from the
         same runs (``Bifurcation.lyapunov``; -inf where the motion sticks, NaN where it
         grows without bound; see :mod:`impactlib.lyapunov`).  Exact method only.
+    progress : True or callable, optional
+        A tqdm bar (True) or ``progress(done, total)`` after each chunk of values.
+    cancel : threading.Event, optional
+        Once set, no further chunk starts; the result holds the values done.
+        (With either, the sweep runs in chunks: :func:`impactlib.streaming.bifurcation`.)
 
     Returns
     -------
@@ -429,6 +435,12 @@ def bifurcation(p: Params, name: str, values, t_end: float = 500.0, t_record: fl
         Rows sorted by value index (then direction, then time); ``status`` and
         ``n_impacts`` aligned with ``values`` (worst status and total over directions).
     """
+    if progress is not None or cancel is not None:
+        from .streaming import bifurcation as chunked
+        return chunked(p, name, values, t_end, t_record, method, x0=x0, v0=v0,
+                       warm_start=warm_start, dt=dt, rtol=rtol, atol=atol, workers=workers,
+                       cap_per_value=cap_per_value, max_impacts=max_impacts,
+                       max_steps=max_steps, lyapunov=lyapunov, progress=progress, cancel=cancel)
     if lyapunov:
         from .lyapunov import bifurcation_with_lyapunov
         return bifurcation_with_lyapunov(p, name, values, t_end, t_record, method, x0, v0,
@@ -533,13 +545,21 @@ def regime_map(p: Params, name_x: str, values_x, name_y: str, values_y,
                x0: float | None = None, v0: float = 0.0, dt: float | None = None,
                rtol: float = 1e-6, atol: float = 1e-9, workers: int | None = None,
                rows_per_task: int = 4, max_impacts: int = 1_000_000,
-               max_steps: int = 20_000_000) -> RegimeMap:
+               max_steps: int = 20_000_000, progress=None, cancel=None) -> RegimeMap:
     """The (m, n) class on a grid of two parameters, e.g. (omega, r): a picture of where
     the paper's Fig. 3 panels sit.
 
     Every cell is one job of :func:`run_jobs` (cells handed out to the workers in small
     blocks; ``rows_per_task`` is accepted for compatibility and not used).  Memory: one
-    block's impacts at a time per worker."""
+    block's impacts at a time per worker.  ``progress`` (True for a tqdm bar, or
+    ``progress(rows_done, rows)``) and ``cancel`` (a threading.Event) run it in blocks of
+    rows: :func:`impactlib.streaming.regime_map`."""
+    if progress is not None or cancel is not None:
+        from .streaming import regime_map as chunked
+        return chunked(p, name_x, values_x, name_y, values_y, t_end, t_record, method, x0=x0,
+                       v0=v0, dt=dt, rtol=rtol, atol=atol, workers=workers,
+                       max_impacts=max_impacts, max_steps=max_steps, progress=progress,
+                       cancel=cancel)
     t_end, t_record, x0c, v0, _, dt, rtol, atol = _check_sweep(
         p, [name_x, name_y], t_end, t_record, x0, v0, method, dt, rtol, atol)
     if name_x == name_y:

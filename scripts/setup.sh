@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Create .venv and install the project. With --browser also install Debian's Chromium and
+# Create .venv and install the project with the versions of scripts/constraints.txt. With --browser also install Debian's Chromium and
 # nginx (the browser tests drive the app through scripts/nginx.conf; nginx only runs in
 # the foreground on loopback ports there, the package's system service is left alone).
 set -euo pipefail
@@ -9,10 +9,12 @@ if [ ! -x .venv/bin/python ]; then
     python3 -m venv .venv
 fi
 .venv/bin/python -m pip install -q --disable-pip-version-check -U pip
+# the exact versions of scripts/constraints.txt (pyproject.toml only gives ranges)
+pip_install=(.venv/bin/python -m pip install -q --disable-pip-version-check -c scripts/constraints.txt)
 if [ -n "$extras" ]; then
-    .venv/bin/python -m pip install -q --disable-pip-version-check -e ".[$extras]"
+    "${pip_install[@]}" -e ".[$extras]"
 else
-    .venv/bin/python -m pip install -q --disable-pip-version-check -e .
+    "${pip_install[@]}" -e .
 fi
 if [ "${1:-}" = "--browser" ]; then
     missing=""

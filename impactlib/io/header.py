@@ -20,8 +20,9 @@ import numpy as np
 
 from .._version import __version__
 
-#: every number in the core's own files: 17 significant digits read back bit for bit
-EXACT = "%.17g"
+#: numbers as Python's repr (the shortest text that reads back bit for bit), whole-number
+#: columns as integers
+EXACT = None
 
 
 def text(value) -> str:
@@ -74,24 +75,36 @@ def write_csv(file, columns: dict, settings: dict | None = None, fmt: str = EXAC
     """Write equally long ``columns`` (name -> numbers) to ``file`` (a path or a text
     file): the settings block (omitted when ``settings`` is None), a header row, rows."""
     names = list(columns)
-    arrays = [np.asarray(columns[n], dtype=float).ravel() for n in names]
+    arrays = [_column(columns[n]) for n in names]
     lengths = {a.size for a in arrays}
     if len(lengths) > 1:
         raise ValueError("columns differ in length: "
                          + ", ".join(f"{n}={a.size}" for n, a in zip(names, arrays)))
-    data = np.column_stack(arrays) if arrays and arrays[0].size else np.zeros((0, len(names)))
     if hasattr(file, "write"):
-        _write(file, names, data, settings, fmt)
+        _write(file, names, arrays, settings, fmt)
     else:
         with open(file, "w", encoding="utf-8", newline="") as f:
-            _write(f, names, data, settings, fmt)
+            _write(f, names, arrays, settings, fmt)
 
 
-def _write(f, names, data, settings, fmt):
+def _column(values) -> np.ndarray:
+    a = np.asarray(values).ravel()
+    if a.dtype.kind == "b":
+        return a.astype(np.int64)
+    if a.dtype.kind in "iu":
+        return a
+    return a.astype(float)
+
+
+def _write(f, names, arrays, settings, fmt):
     if settings is not None:
         f.write(settings_lines(settings))
     f.write(",".join(names) + "\n")
-    np.savetxt(f, data, delimiter=",", fmt=fmt)
+    if fmt is None:
+        for row in zip(*(a.tolist() for a in arrays)):
+            f.write(",".join(map(repr, row)) + "\n")
+    elif arrays and arrays[0].size:
+        np.savetxt(f, np.column_stack([a.astype(float) for a in arrays]), delimiter=",", fmt=fmt)
 
 
 def read_csv(file) -> tuple[dict, dict]:
