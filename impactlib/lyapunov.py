@@ -38,16 +38,28 @@ GROWTH = 1.25        # last quarter's largest |v| over the first's: unbounded (n
 class Lyapunov(Result):
     """Result of :func:`lyapunov` (exponents and errors in 1/s, times in s).
 
-    exponents : (2,) per unit time, descending; -inf where the motion sticks; NaN where it
-        grows without bound (no dissipation) or the run stopped early.
-    error : (2,) standard error over the sub-windows (0 for -inf).
-    n_impacts : impacts inside the record window.
-    nu : impacts per unit time in the window.
-    window : (t_record, t_end).
-    sticks, unbounded : the two cases above.
-    status : the run's status (as :class:`impactlib.Solution`).  params : Params.
-    final : (t, x, v, stuck) where the run stopped.
-    message : what the numbers mean or why they are missing.
+    Attributes
+    ----------
+    params : Params
+    exponents : ndarray, shape (2,)
+        Per unit time, descending; -inf where the motion sticks; NaN where it grows
+        without bound (no dissipation) or the run stopped early.
+    error : ndarray, shape (2,)
+        Standard error over the sub-windows (0 for -inf).
+    n_impacts : int
+        Impacts inside the record window.
+    nu : float
+        Impacts per unit time in the window.
+    window : tuple
+        (t_record, t_end).
+    sticks, unbounded : bool
+        The two cases above.
+    status : int
+        The run's status (as :class:`impactlib.Solution`).
+    message : str
+        What the numbers mean or why they are missing.
+    final : tuple
+        (t, x, v, stuck) where the run stopped.
     """
 
     params: Params
