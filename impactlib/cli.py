@@ -31,16 +31,20 @@ def build_parser() -> argparse.ArgumentParser:
     acc.add_argument("--quick", action="store_true",
                      help="only the cases marked quick, five method settings and 3 repeats "
                           "(the full report runs every case, more settings, 7 repeats)")
-    acc.add_argument("--out", required=True, metavar="DIR",
+    acc.add_argument("--out", default=None, metavar="DIR",
                      help="directory to write BENCHMARKS-accuracy.md and accuracy.png into "
                           "(created if missing; the repository keeps its copy in bench/)")
     return parser
 
 
 def main(argv=None) -> int:
-    args = build_parser().parse_args(argv)
+    parser = build_parser()
+    args = parser.parse_args(argv)
     if args.command in commands.COMMANDS:
         return commands.run(args)
+    if args.command == "accuracy" and args.out is None:
+        parser.error("accuracy needs --out DIR: where to write BENCHMARKS-accuracy.md and "
+                     "accuracy.png")
     if args.command == "accuracy":
         missing = [m for m in REPORT_MODULES if not _importable(m)]
         if missing:

@@ -17,27 +17,38 @@ import numpy as np
 from .model import FIELDS, PARAM_NAMES, Params
 
 
+def number(text: str) -> float:
+    """argparse type: a finite number (nan, inf and text are refused, naming the option)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if value != value or value in (float("inf"), float("-inf")):
+        raise argparse.ArgumentTypeError(f"{text!r} is not a finite number")
+    return value
+
+
 def _add_params(parser):
     g = parser.add_argument_group("parameters (default: the paper's)")
     for name in PARAM_NAMES:
         f = FIELDS[name]
-        g.add_argument(f"--{name}", type=float, default=getattr(Params(), name),
+        g.add_argument(f"--{name}", type=number, default=getattr(Params(), name),
                        help=f"{f.doc} (default %(default)s)")
 
 
 def _add_run(parser, t_end=500.0, t_record=None, method=True):
     g = parser.add_argument_group("run")
-    g.add_argument("--t-end", type=float, default=t_end, help="end of each run, s (default %(default)s)")
-    g.add_argument("--t-record", type=float, default=t_record,
+    g.add_argument("--t-end", type=number, default=t_end, help="end of each run, s (default %(default)s)")
+    g.add_argument("--t-record", type=number, default=t_record,
                    help="start of the record window, s (default %s)" %
                         ("t_end / 2" if t_record is None else t_record))
-    g.add_argument("--x0", type=float, default=None, help="start position (default max(0, g))")
-    g.add_argument("--v0", type=float, default=0.0, help="start velocity (default 0)")
+    g.add_argument("--x0", type=number, default=None, help="start position (default max(0, g))")
+    g.add_argument("--v0", type=number, default=0.0, help="start velocity (default 0)")
     if method:
         g.add_argument("--method", default="exact", choices=("exact", "rk4", "rk45"))
-        g.add_argument("--dt", type=float, default=None, help="rk4 step, s")
-        g.add_argument("--rtol", type=float, default=1e-6, help="rk45 relative tolerance")
-        g.add_argument("--atol", type=float, default=1e-9, help="rk45 absolute tolerance")
+        g.add_argument("--dt", type=number, default=None, help="rk4 step, s")
+        g.add_argument("--rtol", type=number, default=1e-6, help="rk45 relative tolerance")
+        g.add_argument("--atol", type=number, default=1e-9, help="rk45 absolute tolerance")
 
 
 def _add_out(parser, tables=None, netcdf=True):
@@ -60,7 +71,7 @@ def add_parsers(sub) -> None:
                        "or sticking intervals (impactlib.simulate)")
     _add_params(s)
     _add_run(s)
-    s.add_argument("--phase", type=float, default=0.0, help="Poincaré section t = phase + nT, s")
+    s.add_argument("--phase", type=number, default=0.0, help="Poincaré section t = phase + nT, s")
     s.add_argument("--dense", type=int, default=0, help="evenly spaced samples of the window")
     _add_out(s, ("impacts", "poincare", "dense", "sticking"), netcdf=False)
 
@@ -68,8 +79,8 @@ def add_parsers(sub) -> None:
                        "(impactlib.bifurcation)")
     _add_params(b)
     b.add_argument("--name", default="omega", choices=PARAM_NAMES, help="swept parameter")
-    b.add_argument("--start", type=float, default=0.1, help="first value (default %(default)s)")
-    b.add_argument("--stop", type=float, default=5.0, help="last value (default %(default)s)")
+    b.add_argument("--start", type=number, default=0.1, help="first value (default %(default)s)")
+    b.add_argument("--stop", type=number, default=5.0, help="last value (default %(default)s)")
     b.add_argument("--num", type=int, default=200, help="values, evenly spaced (default %(default)s)")
     _add_run(b, t_record=250.0)
     b.add_argument("--warm-start", default="no", choices=("no", "up", "down", "both"),
@@ -84,8 +95,8 @@ def add_parsers(sub) -> None:
     for axis, name, lo, hi in (("x", "omega", 0.1, 5.0), ("y", "r", 0.0, 1.0)):
         r.add_argument(f"--name-{axis}", default=name, choices=PARAM_NAMES,
                        help=f"parameter along {axis} (default %(default)s)")
-        r.add_argument(f"--{axis}-start", type=float, default=lo, help="first value (default %(default)s)")
-        r.add_argument(f"--{axis}-stop", type=float, default=hi, help="last value (default %(default)s)")
+        r.add_argument(f"--{axis}-start", type=number, default=lo, help="first value (default %(default)s)")
+        r.add_argument(f"--{axis}-stop", type=number, default=hi, help="last value (default %(default)s)")
         r.add_argument(f"--n{axis}", type=int, default=50, help="values (default %(default)s)")
     _add_run(r, t_record=250.0)
     _progress_flag(r)
@@ -95,20 +106,20 @@ def add_parsers(sub) -> None:
                        "its multipliers (impactlib.periodic_orbit)")
     _add_params(o)
     o.add_argument("--n", type=int, default=1, help="forcing periods per orbit (default 1)")
-    o.add_argument("--x0", type=float, default=None, help="Newton's start (default: settled from rest)")
-    o.add_argument("--v0", type=float, default=None)
-    o.add_argument("--phase", type=float, default=0.0, help="section, s")
+    o.add_argument("--x0", type=number, default=None, help="Newton's start (default: settled from rest)")
+    o.add_argument("--v0", type=number, default=None)
+    o.add_argument("--phase", type=number, default=0.0, help="section, s")
     _add_out(o, netcdf=False)
 
     a = sub.add_parser("basins", help="which attractor each start of a grid settles on "
                        "(impactlib.basins)")
     _add_params(a)
-    a.add_argument("--x-range", type=float, nargs=2, default=(0.0, 1.0), metavar=("LO", "HI"))
-    a.add_argument("--v-range", type=float, nargs=2, default=(-1.5, 1.5), metavar=("LO", "HI"))
+    a.add_argument("--x-range", type=number, nargs=2, default=(0.0, 1.0), metavar=("LO", "HI"))
+    a.add_argument("--v-range", type=number, nargs=2, default=(-1.5, 1.5), metavar=("LO", "HI"))
     a.add_argument("--n", type=int, nargs=2, default=(50, 50), metavar=("NX", "NV"))
-    a.add_argument("--phase", type=float, default=0.0, help="section of the starts, s")
+    a.add_argument("--phase", type=number, default=0.0, help="section of the starts, s")
     a.add_argument("--max-periods", type=int, default=1000)
-    a.add_argument("--time-limit", type=float, default=None, help="seconds; partial result after")
+    a.add_argument("--time-limit", type=number, default=None, help="seconds; partial result after")
     _progress_flag(a)
     _add_out(a)
 

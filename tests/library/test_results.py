@@ -173,6 +173,7 @@ def test_xarray_round_trips_through_netcdf(results, name, tmp_path):
 
 
 def test_xarray_dims_and_coordinates(results):
+    pytest.importorskip("xarray")
     rm = results["regime_map"].to_xarray()
     assert rm["m"].dims == ("r", "omega")
     assert np.array_equal(rm["omega"], results["regime_map"].values_x)

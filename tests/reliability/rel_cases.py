@@ -215,7 +215,8 @@ def cli_cases() -> list[Case]:
             opt = next((o for o in action.option_strings if o.startswith("--")), None)
             if opt is None or action.nargs == 0:
                 continue
-            if action.type in (float, int) or opt.lstrip("-") in (
+            numeric = action.type in (float, int) or getattr(action.type, "__name__", "") == "number"
+            if numeric or opt.lstrip("-") in (
                     "m", "c", "k", "g", "r", "omega", "t-end", "t_end", "t-record",
                     "t_record", "psi", "phase", "dt"):
                 for shown, value in bad_numbers:
