@@ -16,6 +16,10 @@ if [ -n "$extras" ]; then
 else
     "${pip_install[@]}" -e .
 fi
+# The wheel installs the app folder as `impact_explorer` only; in the checkout, scripts,
+# benches and tests import it as `app`, so the checkout's root goes on the venv's path.
+site="$(.venv/bin/python -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])')"
+printf '%s\n' "$PWD" > "$site/impact_explorer_checkout.pth"
 if [ "${1:-}" = "--browser" ]; then
     missing=""
     [ -x /usr/bin/chromium ] || missing="chromium"
