@@ -45,15 +45,16 @@ RUN groupadd --gid 10001 app \
     && install -d -o app -g app -m 0750 "${IMPACT_CACHE}" "${NUMBA_CACHE_DIR}" \
         "${IMPACT_CACHE}/tmp"
 
-# Install the project (not editable) with the versions pinned in pyproject.toml, using
+# Install the project (not editable) with the versions pinned in scripts/constraints.txt, using
 # the pip that Debian's python3-venv ships (23.0.1, which uses Debian's CA store).
 # RUN steps name paths only through ENV/ARG variables: tests/container replays them.
 ARG IMPACT_SRC=/tmp/impact-src
-COPY pyproject.toml README.md ${IMPACT_SRC}/
+COPY pyproject.toml README.md scripts/constraints.txt ${IMPACT_SRC}/
 COPY impactlib/ ${IMPACT_SRC}/impactlib/
 COPY app/ ${IMPACT_SRC}/app/
 RUN python3 -m venv "${VIRTUAL_ENV}" \
-    && "${VIRTUAL_ENV}/bin/pip" install --no-cache-dir --disable-pip-version-check "${IMPACT_SRC}" \
+    && "${VIRTUAL_ENV}/bin/pip" install --no-cache-dir --disable-pip-version-check \
+        -c "${IMPACT_SRC}/constraints.txt" "${IMPACT_SRC}" \
     && rm -rf "${IMPACT_SRC}"
 
 COPY app/ ${IMPACT_HOME}/app/

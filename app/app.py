@@ -1,14 +1,18 @@
-"""Serve with ``panel serve app/app.py`` (page /app)."""
+"""Serve with ``panel serve app/app.py`` (page /app), or ``impact-explorer serve`` from an
+installed package (where this folder is the package ``impact_explorer``)."""
+import importlib
 import sys
 from pathlib import Path
 
 import panel as pn
 
 # `panel serve` puts this file's folder first on sys.path, where `import app` would find
-# this very file; the `app` package is the folder itself, one level up.
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
-from app import serving  # noqa: E402
-from app.explorer import Explorer  # noqa: E402
+# this very file; the package is the folder itself (`app` in a checkout,
+# `impact_explorer` when installed), imported from one level up.
+_HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(_HERE.parent))
+serving = importlib.import_module(f"{_HERE.name}.serving")
+Explorer = importlib.import_module(f"{_HERE.name}.explorer").Explorer
 
 
 def create_app() -> Explorer:

@@ -11,10 +11,10 @@ skiprows=1)`` read them.
 from __future__ import annotations
 
 import io
-from importlib.metadata import PackageNotFoundError, version
 
 import numpy as np
 import panel as pn
+from impactlib.io.header import read_header, settings_lines, write_csv
 
 from .research import attractor_text
 from .settings import SWEEP_RANGES, method_options
@@ -22,52 +22,28 @@ from .state import to_query
 
 #: Settings written at the top of every CSV file, by URL name.
 HEADER_NAMES = ("m", "c", "k", "g", "r", "omega", "psi", "t_end", "t_record", "method")
-
-
-def package_version() -> str:
-    try:
-        return version("impact-explorer")
-    except PackageNotFoundError:
-        return "unknown"
-
-
-def _text(value) -> str:
-    return value if isinstance(value, str) else "" if value is None else repr(value)
+#: the app's files keep 10 significant digits (the links' precision)
+FMT = "%.10g"
+__all__ = ["HEADER_NAMES", "Downloads", "header", "read_header", "to_csv"]
 
 
 def header(run, extra: dict | None = None) -> str:
     """``# name = value`` lines: the settings of ``run`` (URL names and texts), then
     ``extra`` (replacing a setting of the same name in place, e.g. the method a sweep
-    really used), then ``version``."""
+    really used), then ``version`` (impactlib's writer)."""
     q = to_query(run)
     values = {n: q.get(n, "") for n in HEADER_NAMES}
-    values.update({k: _text(v) for k, v in (extra or {}).items()})
-    values["version"] = package_version()
-    return "".join(f"# {n} = {v}\n" for n, v in values.items())
-
-
-def read_header(text: str) -> dict:
-    """The ``# name = value`` lines at the top of ``text`` as a dict of strings."""
-    out = {}
-    for line in text.splitlines():
-        if not line.startswith("#"):
-            break
-        name, _, value = line[1:].partition("=")
-        out[name.strip()] = value.strip()
-    return out
+    values.update(extra or {})
+    return settings_lines(values)
 
 
 def to_csv(columns: dict, run=None, extra: dict | None = None) -> io.StringIO:
     """A CSV file (the settings of ``run`` and ``extra`` as comment lines, a header
     line, then one row per sample) of equally long columns."""
-    names = list(columns)
-    data = np.column_stack([np.asarray(columns[n], dtype=float) for n in names]) \
-        if names and len(columns[names[0]]) else np.zeros((0, len(names)))
     buf = io.StringIO()
     if run is not None:
         buf.write(header(run, extra))
-    buf.write(",".join(names) + "\n")
-    np.savetxt(buf, data, delimiter=",", fmt="%.10g")
+    write_csv(buf, {n: np.asarray(c, dtype=float) for n, c in columns.items()}, None, fmt=FMT)
     buf.seek(0)
     return buf
 

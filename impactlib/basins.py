@@ -35,6 +35,7 @@ from .classify import MAX_PERIOD, classify, describe
 from .flight import FA, OM
 from .model import Params, RunLimits
 from .simulate import run_constants, run_kernel, simulate
+from impactlib.io.result import SweepResult
 
 SETTLE_RTOL = 1e-6         # settling tolerance, relative to the grid's scale (see _scale)
 ROUND_RTOL = 1e-10         # error floor: rounding accumulated over an orbit's flights and
@@ -335,13 +336,18 @@ class BasinRows:
     message: str
 
 
-@dataclass(frozen=True)
-class Basins:
+@dataclass(frozen=True, repr=False, eq=False)
+class Basins(SweepResult):
     """Result of :func:`basins`.
 
     ``labels[i, j]`` is the attractor (index into ``attractors``) that the start
     (x[j], v[i]) at t0 = phase settles on; -1 undecided.  ``fractions[a]`` is the share of
     all nx * nv cells in the basin of attractor a; ``undecided`` the share of -1.
+    ``x`` (nx,) and ``v`` (nv,) are the grid of starts (length, length per time unit),
+    ``phase`` the section (s), ``periods`` (nv, nx) the forcing periods followed per start,
+    ``complete`` False when a time limit stopped it, ``elapsed`` seconds (not part of
+    ``==``), ``attractors`` the :class:`Attractor` found, in order of discovery,
+    ``params`` the parameters and ``message`` what stopped it or "complete".
     """
 
     params: Params
@@ -719,7 +725,8 @@ def _iter(p, xr, vr, nx, nv, phase, max_periods, n_window, rows_per_block, worke
 
 def basins(p: Params, x_range, v_range, n=(100, 100), phase: float = 0.0, *,
            max_periods: int = 1000, n_window: int = 128, workers: int | None = None,
-           time_limit: float | None = None, limits: RunLimits = RunLimits()) -> Basins:
+           time_limit: float | None = None, limits: RunLimits = RunLimits(), progress=None,
+           cancel=None) -> Basins:
     """Which attractor each start of a grid on the section t = phase settles on.
 
     Parameters
@@ -745,11 +752,20 @@ def basins(p: Params, x_range, v_range, n=(100, 100), phase: float = 0.0, *,
         (``complete`` False, rows not run -1, said in ``message``).
     limits : RunLimits
         Impact and step ceilings per start.
+    progress : True or callable, optional
+        A tqdm bar (True) or ``progress(rows_done, nv)`` after each block of rows.
+    cancel : threading.Event, optional
+        Once set, no further block starts (rows not run stay -1, ``complete`` False).
 
     Returns
     -------
     Basins
     """
+    if progress is not None or cancel is not None:
+        from .streaming import basins as chunked
+        return chunked(p, x_range, v_range, n, phase, max_periods=max_periods,
+                       n_window=n_window, workers=workers, time_limit=time_limit,
+                       limits=limits, progress=progress, cancel=cancel)
     xr, vr, (nx, nv), phase = _check(p, x_range, v_range, n, phase, max_periods, n_window,
                                      time_limit)
     tic = time.perf_counter()

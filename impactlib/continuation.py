@@ -55,6 +55,7 @@ from .flight import G, K, M, OM, R, C_, flight_state, start_segment, system_cons
 from .model import Params
 from .orbits import check_start, periodic_orbit
 from .tangent import flow_jacobian
+from impactlib.io.result import SweepResult
 
 NEWTON_TOL = 1e-11
 NEWTON_MAX = 8
@@ -213,16 +214,34 @@ class Event(tuple):
                         self.impact_times, self.impact_velocities))
 
 
-@dataclass(frozen=True)
-class Branch:
+@dataclass(frozen=True, repr=False, eq=False)
+class Branch(SweepResult):
     """Result of :func:`continuation`: one entry per point along the branch (located
     events included, in order).
 
-    param, x, v : (k,) the parameter and the orbit's state on the section t = phase.
-    multipliers : (k, 2) complex, largest modulus first.  stable, admissible : (k,) bool.
-    events : list of :class:`Event`, each a (kind, value) pair.
-    impact_times, impact_velocities : (k, m) the unknowns of each point.
-    message : why the branch ended.
+    Attributes
+    ----------
+    name : str
+        The continued parameter.
+    n : int
+        Forcing periods per orbit.
+    impacts : int
+        Impacts per orbit (m).
+    phase : float
+        The section (s).
+    param, x, v : ndarray, shape (k,)
+        The parameter and the orbit's state on the section t = phase.
+    multipliers : ndarray of complex, shape (k, 2)
+        Largest modulus first.
+    stable, admissible : ndarray of bool, shape (k,)
+    events : list of Event
+        Each a (kind, value) pair.
+    impact_times, impact_velocities : ndarray, shape (k, m)
+        The unknowns of each point (s; velocity before impact).
+    message : str
+        Why the branch ended.
+    start : PeriodicOrbit
+        The orbit the branch started from (its ``params`` are the fixed parameters).
     """
 
     name: str
@@ -462,7 +481,7 @@ def continuation(p: Params, name: str, stop: float, n: int = 1, x0: float | None
         period-doubling event of an n/2 branch (x0, v0 = event.x, event.v and p =
         event.params), the branch switches onto the doubled orbit.
     ds : float, optional
-        First arclength step (default |stop - start| / 100); adapted on the way.
+        First arclength step (default ``abs(stop - start) / 100``); adapted on the way.
     max_points : int
 
     Returns

@@ -20,6 +20,7 @@ worker process.
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 
@@ -27,7 +28,7 @@ import numpy as np
 
 from .model import Params
 from .sweeps import (CAP_PER_VALUE, Bifurcation, RegimeMap, _check_sweep, merge_parts,
-                     _values_array, bifurcation as _local_bifurcation,
+                     _values_array, sweep_options, bifurcation as _local_bifurcation,
                      regime_map as _local_regime_map)
 
 TASKS_PER_THREAD = 4     # chunks per worker thread: enough to balance uneven values
@@ -74,8 +75,9 @@ def bifurcation(client, p: Params, name: str, values, t_end: float = 500.0,
                 x0: float | None = None, v0: float = 0.0, warm_start: bool | str = False,
                 dt: float | None = None, rtol: float = 1e-6, atol: float = 1e-9,
                 cap_per_value: int = CAP_PER_VALUE, max_impacts: int = 1_000_000,
-                max_steps: int = 20_000_000) -> Bifurcation:
+                max_steps: int = 20_000_000, lyapunov: bool = False) -> Bifurcation:
     """:func:`impactlib.bifurcation` with the values spread over a Dask cluster.
+    ``lyapunov=True`` brings each value's largest exponent along, as the local run.
 
     Parameters
     ----------
@@ -102,8 +104,22 @@ def bifurcation(client, p: Params, name: str, values, t_end: float = 500.0,
         raise ValueError(f"chunk={chunk!r} must be a whole number >= 1")
     kwargs = dict(t_end=t_end, t_record=t_record, method=method, x0=x0, v0=v0, dt=dt,
                   rtol=rtol, atol=atol, cap_per_value=cap_per_value,
-                  max_impacts=max_impacts, max_steps=max_steps)
+                  max_impacts=max_impacts, max_steps=max_steps, lyapunov=lyapunov)
     tic = time.perf_counter()
+
+    def finish(bif, lams):
+        # the exponents per value as the local run merges them (the larger of two
+        # directions), and the same recorded settings
+        lam = None
+        if lyapunov:
+            lam = np.full(values.size, -math.inf)
+            for pos, part in lams:
+                lam[pos] = np.maximum(lam[pos], part)
+        opts = dict(t_end=t_end, t_record=t_record, method=method, x0=x0, v0=v0,
+                    warm_start=warm_start)
+        opts.update(dict(lyapunov=True) if lyapunov else dict(dt=dt, rtol=rtol, atol=atol))
+        return dataclasses.replace(bif, lyapunov=lam, params=p, options=sweep_options(**opts))
+
     if warm_start:
         directions = ["up", "down"] if warm_start == "both" else [
             "up" if warm_start is True else warm_start]
@@ -111,17 +127,20 @@ def bifurcation(client, p: Params, name: str, values, t_end: float = 500.0,
                           [values] * len(directions),
                           [dict(kwargs, warm_start=d) for d in directions], pure=False)
         whole = np.arange(values.size)
-        parts = [(whole, b.status, b.n_impacts, _row_arrays(b, 0))
-                 for b in client.gather(futs)]
-        return merge_parts(name, values, parts, time.perf_counter() - tic)
+        done = client.gather(futs)
+        parts = [(whole, b.status, b.n_impacts, _row_arrays(b, 0)) for b in done]
+        return finish(merge_parts(name, values, parts, time.perf_counter() - tic),
+                      [(whole, b.lyapunov) for b in done])
     size = int(chunk) if chunk else _default_chunk(client, values.size, 16)
     edges = _edges(values.size, size)
     futs = client.map(_bifurcation_task, [p] * len(edges), [name] * len(edges),
                       [values[a:b] for a, b in edges], [kwargs] * len(edges), pure=False)
     # each task numbered its values from 0: shift to positions in the full array
+    done = client.gather(futs)
     parts = [(np.arange(a, b), part.status, part.n_impacts, _row_arrays(part, a))
-             for (a, b), part in zip(edges, client.gather(futs))]
-    return merge_parts(name, values, parts, time.perf_counter() - tic)
+             for (a, b), part in zip(edges, done)]
+    return finish(merge_parts(name, values, parts, time.perf_counter() - tic),
+                  [(np.arange(a, b), part.lyapunov) for (a, b), part in zip(edges, done)])
 
 
 def _row_arrays(b: Bifurcation, offset: int):
@@ -172,7 +191,9 @@ def regime_map(client, p: Params, name_x: str, values_x, name_y: str, values_y,
     motions = {(iy + a, ix): mo
                for (a, _), b in zip(edges, blocks) for (iy, ix), mo in b[3].items()}
     return RegimeMap(name_x, vx, name_y, vy, impacts, period, status,
-                     time.perf_counter() - tic, motions)
+                     time.perf_counter() - tic, motions, params=p,
+                     options=sweep_options(t_end=t_end, t_record=t_record, method=method,
+                                           x0=x0, v0=v0, dt=dt, rtol=rtol, atol=atol))
 
 
 __all__ = ["bifurcation", "regime_map"]

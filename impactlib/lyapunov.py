@@ -28,23 +28,38 @@ from ._jit import jit
 from .model import Params, RunLimits, check_run
 from .simulate import run_constants
 from .tangent import tangent_run
+from impactlib.io.result import Result
 
 WINDOWS = 10
 GROWTH = 1.25        # last quarter's largest |v| over the first's: unbounded (no dissipation)
 
 
-@dataclass(frozen=True)
-class Lyapunov:
-    """Result of :func:`lyapunov`.
+@dataclass(frozen=True, repr=False, eq=False)
+class Lyapunov(Result):
+    """Result of :func:`lyapunov` (exponents and errors in 1/s, times in s).
 
-    exponents : (2,) per unit time, descending; -inf where the motion sticks; NaN where it
-        grows without bound (no dissipation) or the run stopped early.
-    error : (2,) standard error over the sub-windows (0 for -inf).
-    n_impacts : impacts inside the record window.
-    nu : impacts per unit time in the window.
-    window : (t_record, t_end).
-    sticks, unbounded : the two cases above.
-    message : what the numbers mean or why they are missing.
+    Attributes
+    ----------
+    params : Params
+    exponents : ndarray, shape (2,)
+        Per unit time, descending; -inf where the motion sticks; NaN where it grows
+        without bound (no dissipation) or the run stopped early.
+    error : ndarray, shape (2,)
+        Standard error over the sub-windows (0 for -inf).
+    n_impacts : int
+        Impacts inside the record window.
+    nu : float
+        Impacts per unit time in the window.
+    window : tuple
+        (t_record, t_end).
+    sticks, unbounded : bool
+        The two cases above.
+    status : int
+        The run's status (as :class:`impactlib.Solution`).
+    message : str
+        What the numbers mean or why they are missing.
+    final : tuple
+        (t, x, v, stuck) where the run stopped.
     """
 
     params: Params
@@ -293,4 +308,6 @@ def bifurcation_with_lyapunov(p, name, values, t_end, t_record, method, x0, v0, 
         # warm "both": the larger of the two directions' exponents (NaN if either is)
         lam_all[order] = np.maximum(lam_all[order], lam)
     bif = sweeps.merge_parts(name, values, parts, time.perf_counter() - tic)
-    return dataclasses.replace(bif, lyapunov=lam_all)
+    return dataclasses.replace(bif, lyapunov=lam_all, params=p, options=sweeps.sweep_options(
+        t_end=t_end, t_record=t_record, method=method, x0=x0, v0=v0, warm_start=warm_start,
+        lyapunov=True))

@@ -178,6 +178,7 @@ def check_run(p: Params, *, t_end, t_record, x0, v0, phase, method, dt, rtol, at
     if method not in METHODS:
         problems.append(f"method={method!r} is unknown; expected one of {', '.join(METHODS)}")
     t_end = _as_float("t_end", t_end, problems)
+    t_record_given = t_record is not None
     # t_record defaults to half the run (the paper's 250 of 500); nan if t_end is bad
     t_record = 0.5 * t_end if t_record is None else _as_float("t_record", t_record, problems)
     x0 = max(0.0, p.g) if x0 is None else _as_float("x0", x0, problems)
@@ -185,8 +186,12 @@ def check_run(p: Params, *, t_end, t_record, x0, v0, phase, method, dt, rtol, at
     phase = _as_float("phase", phase, problems)
     if math.isfinite(t_end) and t_end <= 0:
         problems.append(f"t_end={t_end!r} must be > 0")
-    if math.isfinite(t_record) and math.isfinite(t_end) and not (0.0 <= t_record <= t_end):
-        problems.append(f"t_record={t_record!r} must lie in [0, t_end={t_end!r}]")
+    # a t_record derived from a bad t_end is not the user's value: name it only if given
+    if math.isfinite(t_record) and math.isfinite(t_end) and t_end > 0:
+        if not (0.0 <= t_record <= t_end):
+            problems.append(f"t_record={t_record!r} must lie in [0, t_end={t_end!r}]")
+    elif t_record_given and math.isfinite(t_record) and t_record < 0:
+        problems.append(f"t_record={t_record!r} must be >= 0")
     if math.isfinite(x0) and x0 < p.g:
         problems.append(f"x0={x0!r} is behind the endstop g={p.g!r} (need x0 >= g)")
     if math.isfinite(phase) and not (0.0 <= phase <= p.T):

@@ -16,6 +16,7 @@ import numpy as np
 from .model import PARAM_NAMES, Params, RunLimits
 from .simulate import run_constants, simulate
 from .tangent import tangent_run
+from impactlib.io.result import Result
 
 NEWTON_MAX = 40
 NEWTON_TOL = 1e-11          # residual, relative to the orbit's size (and 1)
@@ -23,19 +24,46 @@ SETTLE_TIME = 250.0         # the paper's transient
 IMPACT_CAP = 4096
 
 
-@dataclass(frozen=True)
-class PeriodicOrbit:
+@dataclass(frozen=True, repr=False, eq=False)
+class PeriodicOrbit(Result):
     """Result of :func:`periodic_orbit`.
 
-    x, v : the orbit's state on the section t = phase (mod T).
-    n, impacts : periods per orbit and impacts in them (the paper's m; inf for a chatter
-        summed to its accumulation point).
-    multipliers : complex (2,), eigenvalues of the n-period map's Jacobian, largest
-        modulus first; both 0 for an orbit that sticks (its Jacobian vanishes).
-    stable : all |multiplier| < 1.  admissible : never below the wall between impacts.
-    converged, residual : Newton's outcome; max |P^n(z) - z| at the returned point.
-    sticks : the orbit rests on the wall for a while in each cycle.
-    impact_times, impact_velocities : the impacts of one cycle from t = phase (v < 0).
+    Units: x in length, v in length per time unit, times in s.
+
+    Attributes
+    ----------
+    params : Params
+    x, v : float
+        The orbit's state on the section t = phase (mod T).
+    n : int
+        Forcing periods per orbit.
+    phase : float
+        The section (s).
+    impacts : float
+        Impacts per orbit (the paper's m; inf for a chatter summed to its accumulation point).
+    label : str
+        The paper's "m-impact period-n" name.
+    multipliers : ndarray of complex, shape (2,)
+        Eigenvalues of the n-period map's Jacobian, largest modulus first; both 0 for an
+        orbit that sticks (its Jacobian vanishes).
+    stable : bool
+        Every ``abs(multiplier) < 1``.
+    admissible : bool
+        Never below the wall between impacts.
+    converged : bool
+        Newton's outcome.
+    residual : float
+        ``max(abs(P^n(z) - z))`` at the returned point.
+    sticks : bool
+        The orbit rests on the wall for a while in each cycle.
+    iterations : int
+        Newton steps taken.
+    message : str
+        Newton's outcome in words.
+    impact_times, impact_velocities : ndarray
+        The impacts of one cycle from t = phase (s; velocity before impact, < 0).
+    jacobian : ndarray, shape (2, 2)
+        Jacobian of the n-period map.
     """
 
     params: Params
@@ -203,7 +231,7 @@ def periodic_orbit(p: Params, n: int = 1, x0: float | None = None, v0: float | N
     Newton's method on F(z) = P^n(z) - z, z = (x, v) on the section t = phase (mod T),
     with the exact Jacobian DP^n = Phi(s_last) S_m ... S_1 Phi(s_0) (flow Jacobians Phi
     and saltation matrices S, :mod:`impactlib.tangent`; Müller 1995; Leine & Nijmeijer
-    2004, ch. 7).  A step that does not reduce |F| is halved (up to 12 times).  Unstable
+    2004, ch. 7).  A step that does not reduce ``|F|`` is halved (up to 12 times).  Unstable
     orbits are fixed points of P^n like stable ones, so Newton finds them from a start
     close enough.  det DP^n = r^(2 m) exp(-2 c n T / m_mass) for m impacts.
 

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import math
 import time
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -14,6 +15,7 @@ from .flight import (G, R, T0, fastest_rate, flight_state, release_time, start_s
                      system_constants)
 from .integrators import advance_rk4, advance_rk45
 from .model import Params, RunLimits, check_run
+from impactlib.io.result import Result
 
 METHOD_IDS = {"exact": 0, "rk4": 1, "rk45": 2}
 HOP_MEMORY = 8           # hops remembered for predicting the next one
@@ -222,9 +224,46 @@ class Samples:
         return self.t.shape[0]
 
 
-@dataclass(frozen=True)
-class Solution:
-    """Result of :func:`simulate` (fields read like scipy's OdeResult)."""
+@dataclass(frozen=True, repr=False, eq=False)
+class Solution(Result):
+    """Result of :func:`simulate` (fields read like scipy's OdeResult).
+
+    Time is in the model's time units (s), x in length units, v in length per time unit.
+
+    Attributes
+    ----------
+    params : Params
+    method : str
+        "exact", "rk4" or "rk45".
+    t_end, t_record : float
+        End of the run and start of the record window (s).
+    phase : float
+        Poincaré section: samples at t = phase + n T (s, in [0, T]).
+    impacts : Impacts
+        Impacts in [t_record, t_end]: ``t`` (s), ``phase`` = t mod T (s), ``v`` velocity just
+        before impact (<= 0).
+    poincare : Samples
+        (t, x, v) on the section inside the window.
+    sticking : ndarray, shape (k, 2)
+        [start, release] times (s) of each interval at rest on the wall, clipped to the window.
+    dense : Samples or None
+        ``dense`` evenly spaced samples (t, x, v) of the window; None if not asked for.
+    status : int
+        0 reached t_end; 1 impact limit; 2 step limit; 3 output full (see ``message``).
+    message : str
+    final : tuple
+        (t, x, v, stuck) where the run stopped.
+    n_impacts : int
+        All impacts, the transient included.
+    n_chatter : int
+        Chatter sequences in the window summed to their accumulation point.
+    nsteps : int
+        Search or integrator steps taken.
+    elapsed : float
+        Seconds in the kernel (not part of ``==``).
+    options : dict
+        The other settings of the run: x0, v0, t0 and dt (rk4) or rtol, atol (rk45).
+    """
 
     params: Params
     method: str
@@ -242,6 +281,7 @@ class Solution:
     n_chatter: int        # chatter sequences in the window summed to their accumulation point
     nsteps: int
     elapsed: float        # seconds in the kernel
+    options: dict = dataclasses.field(default_factory=dict)
 
     @property
     def success(self) -> bool:
@@ -292,6 +332,15 @@ def _built(cls, **fields):
     obj = object.__new__(cls)
     obj.__dict__.update(fields)
     return obj
+
+
+def _options(method, x0, v0, t0, dt, rtol, atol) -> dict:
+    out = {"x0": x0, "v0": v0, "t0": float(t0)}
+    if method == "rk4":
+        out["dt"] = dt
+    elif method == "rk45":
+        out.update(rtol=rtol, atol=atol)
+    return out
 
 
 def simulate(p: Params, t_end: float = 500.0, x0: float | None = None, v0: float = 0.0,
@@ -375,4 +424,4 @@ def simulate(p: Params, t_end: float = 500.0, x0: float | None = None, v0: float
                   impacts=impacts, poincare=poincare, sticking=stick[:n_stick],
                   dense=dense_out, status=status, message=message,
                   final=(tf, xf, vf, bool(stuck)), n_impacts=n_tot, n_chatter=n_tail,
-                  nsteps=nsteps, elapsed=elapsed)
+                  nsteps=nsteps, elapsed=elapsed, options=_options(method, x0, v0, t0, dt, rtol, atol))

@@ -25,6 +25,7 @@ from .events import step_caps
 from .flight import G, OM, system_constants_rows
 from .model import PARAM_NAMES, Params, RunLimits, check_run, fastest_rate, rk4_stability_limits
 from .simulate import METHOD_IDS, run_kernel, section_times, simulate
+from impactlib.io.result import SweepResult
 
 CAP_PER_VALUE = 4096        # impacts kept per value; more are counted, flagged in status
 _POOL_LOCK = threading.Lock()
@@ -126,9 +127,33 @@ def rows_kernel(sps, method, x0s, v0s, t_end, t_record, hmaxs, rates, dt, rtol, 
             classes[i, 1] = n
 
 
-@dataclass(frozen=True)
-class Bifurcation:
-    """Impacts of a sweep, one row per recorded impact (aligned 1-D arrays)."""
+@dataclass(frozen=True, repr=False, eq=False)
+class Bifurcation(SweepResult):
+    """Impacts of a sweep, one row per recorded impact (aligned 1-D arrays).
+
+    Attributes
+    ----------
+    name : str
+        The swept parameter.
+    values : ndarray, shape (N,)
+        The swept values, in the order given (units of ``name``).
+    param, v, t, phase, index, direction : ndarray, shape (R,)
+        One row per recorded impact: the swept value, the velocity just before impact
+        (<= 0), the impact time from its run's start (s), t mod T (s), the index into
+        ``values``, and +1 / -1 for a warm-started sweep up / down (0 independent).
+    status : ndarray of int, shape (N,)
+        Per value: 0 ok, 1 impact limit, 2 step limit, 3 more impacts than kept.
+    n_impacts : ndarray of int, shape (N,)
+        Per value: impacts in the record window, kept or not.
+    elapsed : float
+        Seconds (not part of ``==``).
+    lyapunov : ndarray, shape (N,) or None
+        Per value: largest Lyapunov exponent (1/s) with ``lyapunov=True``.
+    params : Params or None
+        The fixed parameters (``name`` takes each value in turn).
+    options : dict
+        The run settings: t_end, t_record, method, x0, v0, warm_start, ...
+    """
 
     name: str
     values: np.ndarray        # the swept values, in the order run
@@ -142,15 +167,23 @@ class Bifurcation:
     n_impacts: np.ndarray     # per value: impacts in the window (kept or not)
     elapsed: float
     lyapunov: np.ndarray | None = None   # per value: largest Lyapunov exponent (lyapunov=True)
+    params: Params | None = None
+    options: dict = dataclasses.field(default_factory=dict)
 
     def __len__(self):
         return self.param.shape[0]
 
 
-@dataclass(frozen=True)
-class RegimeMap:
+@dataclass(frozen=True, repr=False, eq=False)
+class RegimeMap(SweepResult):
     """(m, n) class of each cell of a two-parameter grid; -1 stands for infinity, -2 for
     undetermined (window too short), 0 impacts for no impact, m = -3 not settled.
+
+    ``values_x`` (nx,) and ``values_y`` (ny,) are the grid of ``name_x`` and ``name_y``;
+    ``impacts`` (m), ``period`` (n) and ``status`` (as in :class:`Bifurcation`) are
+    (ny, nx) integer arrays, row iy and column ix for (values_y[iy], values_x[ix]);
+    ``elapsed`` seconds (not part of ``==``); ``params`` the fixed parameters and
+    ``options`` the run settings (t_end, t_record, method, x0, v0, ...).
 
     Cells whose section points never repeat are judged by :func:`classify` on their own
     run (the Lyapunov criterion): ``motions[(iy, ix)]`` holds its verdict, and their codes
@@ -167,6 +200,8 @@ class RegimeMap:
     status: np.ndarray        # (ny, nx)
     elapsed: float
     motions: dict = dataclasses.field(default_factory=dict)   # (iy, ix) -> classify's Motion
+    params: Params | None = None
+    options: dict = dataclasses.field(default_factory=dict)
 
     def motion(self, iy: int, ix: int) -> Motion:
         got = self.motions.get((int(iy), int(ix)))
@@ -361,7 +396,8 @@ def bifurcation(p: Params, name: str, values, t_end: float = 500.0, t_record: fl
                 warm_start: bool | str = False, dt: float | None = None, rtol: float = 1e-6,
                 atol: float = 1e-9, workers: int | None = None,
                 cap_per_value: int = CAP_PER_VALUE, max_impacts: int = 1_000_000,
-                max_steps: int = 20_000_000, lyapunov: bool = False) -> Bifurcation:
+                max_steps: int = 20_000_000, lyapunov: bool = False, progress=None,
+                cancel=None) -> Bifurcation:
     """Impact velocities against one parameter (the paper's Fig. 3).
 
     Parameters
@@ -387,6 +423,11 @@ def bifurcation(p: Params, name: str, values, t_end: float = 500.0, t_record: fl
         Also the largest Lyapunov exponent of each value over [t_record, t_end], from the
         same runs (``Bifurcation.lyapunov``; -inf where the motion sticks, NaN where it
         grows without bound; see :mod:`impactlib.lyapunov`).  Exact method only.
+    progress : True or callable, optional
+        A tqdm bar (True) or ``progress(done, total)`` after each chunk of values.
+    cancel : threading.Event, optional
+        Once set, no further chunk starts; the result holds the values done.
+        (With either, the sweep runs in chunks: :func:`impactlib.streaming.bifurcation`.)
 
     Returns
     -------
@@ -394,6 +435,12 @@ def bifurcation(p: Params, name: str, values, t_end: float = 500.0, t_record: fl
         Rows sorted by value index (then direction, then time); ``status`` and
         ``n_impacts`` aligned with ``values`` (worst status and total over directions).
     """
+    if progress is not None or cancel is not None:
+        from .streaming import bifurcation as chunked
+        return chunked(p, name, values, t_end, t_record, method, x0=x0, v0=v0,
+                       warm_start=warm_start, dt=dt, rtol=rtol, atol=atol, workers=workers,
+                       cap_per_value=cap_per_value, max_impacts=max_impacts,
+                       max_steps=max_steps, lyapunov=lyapunov, progress=progress, cancel=cancel)
     if lyapunov:
         from .lyapunov import bifurcation_with_lyapunov
         return bifurcation_with_lyapunov(p, name, values, t_end, t_record, method, x0, v0,
@@ -435,7 +482,21 @@ def bifurcation(p: Params, name: str, values, t_end: float = 500.0, t_record: fl
 
         run_jobs(sps, hmaxs, rates, x0s, np.full(n, v0), on_block=collect, workers=workers,
                  **common)
-    return merge_parts(name, values, parts, time.perf_counter() - tic)
+    return dataclasses.replace(
+        merge_parts(name, values, parts, time.perf_counter() - tic), params=p,
+        options=sweep_options(t_end=t_end, t_record=t_record, method=method, x0=x0, v0=v0,
+                              warm_start=warm_start, dt=dt, rtol=rtol, atol=atol))
+
+
+def sweep_options(**kw) -> dict:
+    """The settings a sweep records (its ``options``): the step or the tolerances only
+    for the method that uses them."""
+    if kw.get("method") != "rk4":
+        kw.pop("dt", None)
+    if kw.get("method") != "rk45":
+        kw.pop("rtol", None)
+        kw.pop("atol", None)
+    return kw
 
 
 class _Done:
@@ -484,13 +545,21 @@ def regime_map(p: Params, name_x: str, values_x, name_y: str, values_y,
                x0: float | None = None, v0: float = 0.0, dt: float | None = None,
                rtol: float = 1e-6, atol: float = 1e-9, workers: int | None = None,
                rows_per_task: int = 4, max_impacts: int = 1_000_000,
-               max_steps: int = 20_000_000) -> RegimeMap:
+               max_steps: int = 20_000_000, progress=None, cancel=None) -> RegimeMap:
     """The (m, n) class on a grid of two parameters, e.g. (omega, r): a picture of where
     the paper's Fig. 3 panels sit.
 
     Every cell is one job of :func:`run_jobs` (cells handed out to the workers in small
     blocks; ``rows_per_task`` is accepted for compatibility and not used).  Memory: one
-    block's impacts at a time per worker."""
+    block's impacts at a time per worker.  ``progress`` (True for a tqdm bar, or
+    ``progress(rows_done, rows)``) and ``cancel`` (a threading.Event) run it in blocks of
+    rows: :func:`impactlib.streaming.regime_map`."""
+    if progress is not None or cancel is not None:
+        from .streaming import regime_map as chunked
+        return chunked(p, name_x, values_x, name_y, values_y, t_end, t_record, method, x0=x0,
+                       v0=v0, dt=dt, rtol=rtol, atol=atol, workers=workers,
+                       max_impacts=max_impacts, max_steps=max_steps, progress=progress,
+                       cancel=cancel)
     t_end, t_record, x0c, v0, _, dt, rtol, atol = _check_sweep(
         p, [name_x, name_y], t_end, t_record, x0, v0, method, dt, rtol, atol)
     if name_x == name_y:
@@ -520,4 +589,6 @@ def regime_map(p: Params, name_x: str, values_x, name_y: str, values_y,
                               dt=dt, rtol=rtol, atol=atol, max_impacts=max_impacts,
                               max_steps=max_steps)
     return RegimeMap(name_x, vx, name_y, vy, impacts, period, status, time.perf_counter() - tic,
-                     motions)
+                     motions, params=p,
+                     options=sweep_options(t_end=t_end, t_record=t_record, method=method,
+                                           x0=x0, v0=v0, dt=dt, rtol=rtol, atol=atol))

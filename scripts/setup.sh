@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Create .venv and install the project. With --browser also install Debian's Chromium and
+# Create .venv and install the project with the versions of scripts/constraints.txt. With --browser also install Debian's Chromium and
 # nginx (the browser tests drive the app through scripts/nginx.conf; nginx only runs in
 # the foreground on loopback ports there, the package's system service is left alone).
 set -euo pipefail
@@ -9,11 +9,17 @@ if [ ! -x .venv/bin/python ]; then
     python3 -m venv .venv
 fi
 .venv/bin/python -m pip install -q --disable-pip-version-check -U pip
+# the exact versions of scripts/constraints.txt (pyproject.toml only gives ranges)
+pip_install=(.venv/bin/python -m pip install -q --disable-pip-version-check -c scripts/constraints.txt)
 if [ -n "$extras" ]; then
-    .venv/bin/python -m pip install -q --disable-pip-version-check -e ".[$extras]"
+    "${pip_install[@]}" -e ".[$extras]"
 else
-    .venv/bin/python -m pip install -q --disable-pip-version-check -e .
+    "${pip_install[@]}" -e .
 fi
+# The wheel installs the app folder as `impact_explorer` only; in the checkout, scripts,
+# benches and tests import it as `app`, so the checkout's root goes on the venv's path.
+site="$(.venv/bin/python -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])')"
+printf '%s\n' "$PWD" > "$site/impact_explorer_checkout.pth"
 if [ "${1:-}" = "--browser" ]; then
     missing=""
     [ -x /usr/bin/chromium ] || missing="chromium"

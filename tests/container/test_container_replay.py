@@ -256,9 +256,14 @@ def test_replay_ran_the_install_and_warmup_steps(replay):
 
 
 def test_installed_versions_are_the_pinned_ones(replay):
+    # the runtime dependencies of pyproject.toml, at the versions scripts/constraints.txt pins
     pyproject = tomllib.loads((spec.REPO / "pyproject.toml").read_text())
-    pins = dict(d.split("==") for d in pyproject["project"]["dependencies"])
-    assert pins, "pyproject.toml pins no dependency"
+    names = [re.split(r"[<>=!~ ;\[]", d, maxsplit=1)[0].lower() for d in pyproject["project"]["dependencies"]]
+    lines = (spec.REPO / "scripts" / "constraints.txt").read_text().splitlines()
+    locked = dict(ln.split("==") for ln in lines if "==" in ln and not ln.startswith("#"))
+    locked = {n.lower().replace("_", "-"): v for n, v in locked.items()}
+    pins = {n: locked[n] for n in names}
+    assert pins, "pyproject.toml declares no dependency"
     python = replay["venv"] / "bin" / "python"
     code = (
         "import importlib.metadata as m, json, sys; "

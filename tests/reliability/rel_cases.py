@@ -208,6 +208,7 @@ def cli_cases() -> list[Case]:
             subs = action.choices
     bad_numbers = [("nan", "nan"), ("inf", "inf"), ("-inf", "-inf"), ("abc", "abc"),
                    ("''", "")]
+    typed: set[str] = set()
     for name, sub in sorted(subs.items()):
         cases.append(Case("CLI", f"{name} --no-such-option", ("--no-such-option",),
                           _cli([name, "--no-such-option"])))
@@ -215,10 +216,16 @@ def cli_cases() -> list[Case]:
             opt = next((o for o in action.option_strings if o.startswith("--")), None)
             if opt is None or action.nargs == 0:
                 continue
-            if action.type in (float, int) or opt.lstrip("-") in (
+            shared = getattr(action.type, "__name__", "") == "number"
+            if action.type in (float, int) or shared or opt.lstrip("-") in (
                     "m", "c", "k", "g", "r", "omega", "t-end", "t_end", "t-record",
                     "t_record", "psi", "phase", "dt"):
-                for shown, value in bad_numbers:
+                # options parsed by the one shared type (impactlib.commands.number) get
+                # every bad value once per command, then one each (each case is a process)
+                values = bad_numbers if not (shared and name in typed) else bad_numbers[:1]
+                if shared:
+                    typed.add(name)
+                for shown, value in values:
                     cases.append(Case("CLI", f"{name} {opt} {shown}", (opt.lstrip("-"),),
                                       _cli([name, opt, value])))
     return cases

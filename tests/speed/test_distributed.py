@@ -123,3 +123,23 @@ def test_process_workers_match_local():
     assert_same_bifurcation(got_b, want_b)
     for f in ("impacts", "period", "status"):
         np.testing.assert_array_equal(getattr(got_m, f), getattr(want_m, f), err_msg=f)
+
+
+@pytest.mark.parametrize("warm_start", [False, "both"])
+def test_bifurcation_with_lyapunov_matches_local(client, warm_start):
+    values = np.linspace(2.0, 3.0, 23)
+    want = il.bifurcation(P, "omega", values, lyapunov=True, warm_start=warm_start, **RUN)
+    got = ild.bifurcation(client, P, "omega", values, chunk=5, lyapunov=True,
+                          warm_start=warm_start, **RUN)
+    assert_same_bifurcation(got, want)
+    np.testing.assert_array_equal(got.lyapunov, want.lyapunov)
+    assert np.isfinite(want.lyapunov).any()
+    # the whole result, settings included, compares equal (timing aside)
+    assert got == want
+
+
+def test_regime_map_result_equals_local(client):
+    vx, vy = np.linspace(1.0, 3.0, 6), np.linspace(0.3, 0.9, 4)
+    want = il.regime_map(P, "omega", vx, "r", vy, **RUN)
+    got = ild.regime_map(client, P, "omega", vx, "r", vy, rows_per_task=1, **RUN)
+    assert got == want and got.settings() == want.settings()
