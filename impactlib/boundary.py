@@ -44,7 +44,6 @@ from __future__ import annotations
 import io
 import math
 from dataclasses import dataclass, field
-from importlib.metadata import PackageNotFoundError, version
 
 import numpy as np
 
@@ -52,6 +51,7 @@ from ._jit import jit
 from .continuation import (Event, segments_clearance, segments_monodromy, segments_residual,
                            segments_section)
 from .flight import G, R, flight_state, start_segment, system_constants
+from .io.header import write_csv
 from .model import FIELDS, MAGNITUDE_MAX, MAGNITUDE_MIN, PARAM_NAMES, Params
 from .tangent import flow_jacobian, saltation
 
@@ -147,21 +147,19 @@ class Boundary:
                 h[n] = repr(getattr(self.params, n))
         h.update({"n": str(self.n), "impacts": str(self.impacts), "phase": repr(self.phase),
                   "points": "; ".join(f"{q.label} at row {q.index}" for q in self.points),
-                  "message": self.message, "version": _version()})
+                  "message": self.message})
         return h
 
-    def to_csv(self) -> str:
-        """The curve as CSV text: ``# name = value`` lines (both parameter names, the
-        event kind, the orbit type, the fixed parameters), a header row, one row per
-        point (17 significant digits).  ``pandas.read_csv(io.StringIO(text),
-        comment="#")`` reads it."""
-        cols = self.columns()
+    def to_csv(self, path=None) -> str:
+        """The curve as CSV text (also written to ``path`` if given): ``# name = value``
+        lines (both parameter names, the event kind, the orbit type, the fixed
+        parameters), a header row, one row per point, numbers read back bit for bit.
+        ``pandas.read_csv(io.StringIO(text), comment="#")`` reads it."""
         buf = io.StringIO()
-        for n, v in self.header().items():
-            buf.write(f"# {n} = {v}\n")
-        buf.write(",".join(cols) + "\n")
-        data = np.column_stack([np.asarray(c, dtype=float) for c in cols.values()])
-        np.savetxt(buf, data, delimiter=",", fmt="%.17g")
+        write_csv(buf, self.columns(), self.header())
+        if path is not None:
+            with open(path, "w", encoding="utf-8", newline="") as f:
+                f.write(buf.getvalue())
         return buf.getvalue()
 
     def to_frame(self):
@@ -170,13 +168,6 @@ class Boundary:
         df = pd.DataFrame(self.columns())
         df.attrs.update(self.header())
         return df
-
-
-def _version() -> str:
-    try:
-        return version("impact-explorer")
-    except PackageNotFoundError:
-        return "unknown"
 
 
 class _Curve:
