@@ -34,7 +34,10 @@ from ._jit import jit
 from .classify import MAX_PERIOD, classify, describe
 from .flight import FA, OM
 from .model import Params, RunLimits
-from .simulate import run_constants, run_kernel, simulate
+from . import engine as E
+from .engine import Buffers
+from .model import RunStatus
+from .simulate import run_constants, simulate
 
 SETTLE_RTOL = 1e-6         # settling tolerance, relative to the grid's scale (see _scale)
 ROUND_RTOL = 1e-10         # error floor: rounding accumulated over an orbit's flights and
@@ -172,7 +175,11 @@ def settle_starts(sp, rate, hmax, phase, x0s, v0s, settle_tol, round_tol, set_fa
     hm = np.zeros(size, dtype=np.int64)
     hc = np.zeros(size, dtype=np.int64)
     empty = np.empty(0)
-    stick = np.empty((0, 2))
+    buf = Buffers(empty, empty, np.empty((0, 2)), empty, empty, empty, empty, empty, empty,
+                  empty, np.empty((0, 2)))
+    ctl = E.controls(phase, phase, hmax, rate, 0.0, 1e-6, 1e-9, max_impacts, max_steps,
+                     E.EXACT, E.NO_TANGENT)
+    run = np.empty(E.NRES)
     for s in range(x0s.shape[0]):
         t = phase
         x = x0s[s]
@@ -190,14 +197,18 @@ def settle_starts(sp, rate, hmax, phase, x0s, v0s, settle_tol, round_tol, set_fa
         while k < max_periods:
             k += 1
             t_next = phase + k * period
-            st, n_rec, n_tot, n_stick, n_tail, tf, x, v, stuck, ns = run_kernel(
-                sp, 0, t, x, v, t_next, t, hmax, rate, 0.0, 1e-6, 1e-9, empty, empty, stick,
-                empty, empty, empty, empty, empty, empty,
-                max(1, max_impacts - n_imp), max(1, max_steps - n_steps))
+            ctl[E.T_END] = t_next
+            ctl[E.T_RECORD] = t
+            ctl[E.MAX_IMPACTS] = max(1, max_impacts - n_imp)
+            ctl[E.MAX_STEPS] = max(1, max_steps - n_steps)
+            st = E.run_engine(sp, ctl, t, x, v, buf, run)
+            x, v = run[E.X_F], run[E.V_F]
+            n_rec, n_tail = int(run[E.N_REC]), int(run[E.N_TAIL])
             t = t_next
-            n_imp += n_tot
-            n_steps += ns
-            if st == 1 or st == 2 or n_imp >= max_impacts or n_steps >= max_steps:
+            n_imp += int(run[E.N_TOT])
+            n_steps += int(run[E.NSTEPS])
+            if (st == RunStatus.IMPACT_LIMIT or st == RunStatus.STEP_LIMIT
+                    or n_imp >= max_impacts or n_steps >= max_steps):
                 res = WORK_LIMIT
                 break
             if not (abs(x) <= huge and abs(v) <= huge):

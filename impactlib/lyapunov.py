@@ -25,9 +25,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from ._jit import jit
-from .model import Params, RunLimits, check_run
+from .model import Params, RunLimits, RunStatus, check_run
+from . import engine as E
+from .engine import Buffers
 from .simulate import run_constants
-from .tangent import tangent_run
 
 WINDOWS = 10
 GROWTH = 1.25        # last quarter's largest |v| over the first's: unbounded (no dissipation)
@@ -91,12 +92,18 @@ def lyapunov_run(p: Params, t0, x0, v0, t_end, t_record, windows=WINDOWS, keep_i
         cap = int(min(limits.max_impacts, 8 * ((t_end - t_record) / p.T + 2) + 1024))
     imp_t = np.empty(cap)
     imp_v = np.empty(cap)
-    out = tangent_run(sp, t0, x0, v0, t_end, t_record, hmax, rate, marks, True, imp_t, imp_v,
-                      logs, limits.max_impacts, limits.max_steps)
-    (status, n_rec, n_tot, tf, xf, vf, stuck, nsteps, _, _, _, _, stuck_m, n_m, vmin,
-     n_tail) = out
-    k = min(n_rec, cap)
-    return logs, marks, status, bool(stuck_m), n_m, imp_t[:k], imp_v[:k], (tf, xf, vf, bool(stuck))
+    ctl = E.controls(t_end, t_record, hmax, rate, 0.0, 0.0, 0.0, limits.max_impacts,
+                     limits.max_steps, E.EXACT, E.QR_MARKS)
+    res = np.empty(E.NRES)
+    status = E.run_engine(sp, ctl, t0, x0, v0,
+                          E.buffers(imp_t=imp_t, imp_v=imp_v, marks=marks, logs=logs), res)
+    if status == RunStatus.OUTPUT_FULL:
+        # the impacts are a side output here (kept for the growth test, or not at all)
+        status = RunStatus.OK
+    k = min(int(res[E.N_REC]), cap)
+    final = (float(res[E.T_F]), float(res[E.X_F]), float(res[E.V_F]), res[E.STUCK] != 0.0)
+    return (logs, marks, status, res[E.STUCK_MARKED] != 0.0, int(res[E.N_MARKED]), imp_t[:k],
+            imp_v[:k], final)
 
 
 def lyapunov(p: Params, t_end: float = 5000.0, t_record: float = 500.0, x0: float | None = None,
@@ -148,7 +155,7 @@ def lyapunov_from(p, t0, x0, v0, t_end, t_record, windows=WINDOWS,
         exps = np.full(2, math.nan)
         err = np.full(2, math.nan)
         msg = "unbounded (no dissipation): the impact speed keeps growing; no exponents"
-    elif status != 0:
+    elif status != RunStatus.OK:
         exps = np.full(2, math.nan)
         err = np.full(2, math.nan)
         msg = "the run stopped at a work limit before t_end; no exponents"
@@ -165,7 +172,7 @@ def lyapunov_from(p, t0, x0, v0, t_end, t_record, windows=WINDOWS,
         msg = f"averaged over [{t_record:g}, {t_end:g}] ({n_m} impacts)"
     return Lyapunov(params=p, exponents=exps, error=err, n_impacts=int(n_m), nu=nu,
                     window=(t_record, t_end), sticks=stuck, unbounded=bool(unbounded),
-                    status=int(status), message=msg, final=final)
+                    status=RunStatus(int(status)), message=msg, final=final)
 
 
 # ------------------------------------------------------------------ sweeps
@@ -175,11 +182,14 @@ def lyapunov_from(p, t0, x0, v0, t_end, t_record, windows=WINDOWS,
 def lyapunov_sweep_kernel(sps, x0s, v0, t_end, t_record, hmaxs, rates, out_t, out_v, counts,
                           status, finals, lyap, warm, max_impacts, max_steps):
     """sweeps.sweep_kernel (exact method, no classification) with the tangent carried
-    along: lyap[i] = (sum log|R11|, sum log|R22|, stuck in window, impacts in window)
+    along by the engine: lyap[i] = (sum log|R11|, sum log|R22|, stuck in window, impacts in window)
     of value i over its window [t0 + t_record, t0 + t_end]."""
     nvals = sps.shape[0]
     marks = np.empty(2)
     logs = np.zeros((1, 2))
+    res = np.empty(E.NRES)
+    none = np.empty(0)
+    stick = np.empty((0, 2))
     x, v, t0 = x0s[0], v0, 0.0
     for i in range(nvals):
         sp = sps[i]
@@ -196,19 +206,21 @@ def lyapunov_sweep_kernel(sps, x0s, v0, t_end, t_record, hmaxs, rates, out_t, ou
         marks[1] = t0 + t_end
         logs[0, 0] = 0.0
         logs[0, 1] = 0.0
-        (st, n_rec, n_tot, tf, xf, vf, stuck, nsteps, j11, j12, j21, j22, stuck_m, n_m, vmin,
-         n_tail) = tangent_run(sp, t0, x, v, t0 + t_end, t0 + t_record, hmaxs[i], rates[i],
-                               marks, True, out_t[i], out_v[i], logs, max_impacts, max_steps)
-        counts[i] = n_rec
+        ctl = E.controls(t0 + t_end, t0 + t_record, hmaxs[i], rates[i], 0.0, 0.0, 0.0,
+                         max_impacts, max_steps, E.EXACT, E.QR_MARKS)
+        buf = Buffers(out_t[i], out_v[i], stick, none, none, none, none, none, none, marks,
+                      logs)
+        st = E.run_engine(sp, ctl, t0, x, v, buf, res)
+        counts[i] = int(res[E.N_REC])
         status[i] = st
-        finals[i, 0] = tf
-        finals[i, 1] = xf
-        finals[i, 2] = vf
-        finals[i, 3] = 1.0 if stuck else 0.0
+        finals[i, 0] = res[E.T_F]
+        finals[i, 1] = res[E.X_F]
+        finals[i, 2] = res[E.V_F]
+        finals[i, 3] = res[E.STUCK]
         lyap[i, 0] = logs[0, 0]
         lyap[i, 1] = logs[0, 1]
-        lyap[i, 2] = 1.0 if stuck_m else 0.0
-        lyap[i, 3] = n_m
+        lyap[i, 2] = res[E.STUCK_MARKED]
+        lyap[i, 3] = res[E.N_MARKED]
 
 
 def largest_exponents(sps_c, sps_r, lyap, status, tau, out_t, out_v, counts, t_lo, t_hi):
@@ -216,8 +228,8 @@ def largest_exponents(sps_c, sps_r, lyap, status, tau, out_t, out_v, counts, t_l
     sticks in the window, NaN where it grows without bound or stopped at a work limit."""
     lam = np.maximum(lyap[:, 0], lyap[:, 1]) / tau
     lam = np.where(lyap[:, 2] > 0, -math.inf, lam)
-    lam = np.where(status == 1, math.nan, lam)
-    lam = np.where(status == 2, math.nan, lam)
+    lam = np.where(status == RunStatus.IMPACT_LIMIT, math.nan, lam)
+    lam = np.where(status == RunStatus.STEP_LIMIT, math.nan, lam)
     for i in np.flatnonzero((sps_c == 0.0) & (sps_r == 1.0)):
         k = min(counts[i], out_t.shape[1])
         if grows_without_bound(out_t[i, :k], out_v[i, :k], t_lo[i], t_hi[i]):
@@ -268,7 +280,8 @@ def bifurcation_with_lyapunov(p, name, values, t_end, t_record, method, x0, v0, 
         lyapunov_sweep_kernel(sps[order], np.ascontiguousarray(x0s[order]), v0, t_end, t_record,
                               hmaxs[order], rates[order], out_t, out_v, counts, status, finals,
                               lyap, warm, max_impacts, max_steps)
-        status = np.where((status == 0) & (counts > cap_per_value), 3, status)
+        status = np.where((status == RunStatus.OK) & (counts > cap_per_value),
+                          RunStatus.OUTPUT_FULL, status)
         t0 = finals[:, 0] - t_end
         lam = largest_exponents(sps[order, 1], sps[order, 4], lyap, status, t_end - t_record,
                                 out_t, out_v, counts, t0 + t_record, t0 + t_end)

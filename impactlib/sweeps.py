@@ -24,7 +24,9 @@ from .classify import MAX_PERIOD, PERIOD_RTOL, Motion, classify, describe, motio
 from .events import step_caps
 from .flight import G, OM, system_constants_rows
 from .model import PARAM_NAMES, Params, RunLimits, check_run, fastest_rate, rk4_stability_limits
-from .simulate import METHOD_IDS, run_kernel, section_times, simulate
+from . import engine as E
+from .engine import METHOD_IDS, Buffers
+from .simulate import section_times, simulate
 
 CAP_PER_VALUE = 4096        # impacts kept per value; more are counted, flagged in status
 _POOL_LOCK = threading.Lock()
@@ -67,7 +69,7 @@ def _executor(workers):
 def sweep_kernel(sps, method, x0s, v0, t_end, t_record, hmaxs, rates, dt, rtol, atol,
                  out_t, out_v, counts, status, finals, classes, classify, warm,
                  max_impacts, max_steps):
-    """Run each row of sps in turn from (x0s[i], v0) (see run_kernel); results into the
+    """Run each row of sps in turn from (x0s[i], v0) (see engine.run_engine); results into the
     out arrays.  :func:`rows_kernel` with one start velocity for all rows."""
     rows_kernel(sps, method, x0s, np.full(sps.shape[0], v0), t_end, t_record, hmaxs, rates,
                 dt, rtol, atol, out_t, out_v, counts, status, finals, classes, classify, warm,
@@ -78,7 +80,7 @@ def sweep_kernel(sps, method, x0s, v0, t_end, t_record, hmaxs, rates, dt, rtol, 
 def rows_kernel(sps, method, x0s, v0s, t_end, t_record, hmaxs, rates, dt, rtol, atol,
                 out_t, out_v, counts, status, finals, classes, classify, warm,
                 max_impacts, max_steps):
-    """Run each row of sps in turn from (x0s[i], v0s[i]) (see run_kernel); results into
+    """Run each row of sps in turn from (x0s[i], v0s[i]) (see engine.run_engine); results into
     the out arrays.
 
     classes[i] = (m, n) codes when classify; finals[i] = (t, x, v, stuck) at the end.
@@ -88,6 +90,7 @@ def rows_kernel(sps, method, x0s, v0s, t_end, t_record, hmaxs, rates, dt, rtol, 
     nvals = sps.shape[0]
     empty = np.empty(0)
     stick = np.empty((0, 2))
+    res = np.empty(E.NRES)
     x, v, t0 = x0s[0], v0s[0], 0.0
     for i in range(nvals):
         sp = sps[i]
@@ -108,16 +111,19 @@ def rows_kernel(sps, method, x0s, v0s, t_end, t_record, hmaxs, rates, dt, rtol, 
             pc_t = empty
         pc_x = np.full(pc_t.shape[0], np.nan)
         pc_v = np.full(pc_t.shape[0], np.nan)
-        st, n_rec, n_tot, n_stick, n_tail, tf, xf, vf, stuck, nsteps = run_kernel(
-            sp, method, t0, x, v, t0 + t_end, t0 + t_record, hmaxs[i], rates[i], dt, rtol, atol,
-            out_t[i], out_v[i], stick, pc_t, pc_x, pc_v, empty, empty, empty,
-            max_impacts, max_steps)
+        ctl = E.controls(t0 + t_end, t0 + t_record, hmaxs[i], rates[i], dt, rtol, atol,
+                         max_impacts, max_steps, method, E.NO_TANGENT)
+        buf = Buffers(out_t[i], out_v[i], stick, pc_t, pc_x, pc_v, empty, empty, empty, empty,
+                      stick)
+        st = E.run_engine(sp, ctl, t0, x, v, buf, res)
+        n_rec = int(res[E.N_REC])
+        n_tail = int(res[E.N_TAIL])
         counts[i] = n_rec
         status[i] = st
-        finals[i, 0] = tf
-        finals[i, 1] = xf
-        finals[i, 2] = vf
-        finals[i, 3] = 1.0 if stuck else 0.0
+        finals[i, 0] = res[E.T_F]
+        finals[i, 1] = res[E.X_F]
+        finals[i, 2] = res[E.V_F]
+        finals[i, 3] = res[E.STUCK]
         if classify:
             nk = min(n_rec, out_t.shape[1])
             m, n = motion_class(pc_x, pc_v, out_t[i, :nk], t0 + t_end, period, n_tail,

@@ -1,5 +1,6 @@
 """Tangent dynamics of the impact oscillator: flow Jacobians, saltation matrices, and a
-run that carries a 2x2 tangent matrix along the exact trajectory.
+the algebra that carries a 2x2 tangent matrix along a run (the engine,
+:mod:`impactlib.engine`, applies it event by event).
 
 Flow Jacobian
 -------------
@@ -48,13 +49,7 @@ import math
 import numpy as np
 
 from ._jit import jit
-from .events import IMPACT, STEP_LIMIT, STICK, impact_outcome, next_impact_grid, search_grid
-from .flight import (ALPHA, C_, G, K, LAM1, LAM2, M, OM, Q_, R, SQ, W0SQ, flight_state,
-                     release_time, start_segment)
-from .simulate import HOP_MATCH_RTOL, HOP_MEMORY, TAIL_TOL
-
-# tangent_run status codes (as simulate.run_kernel)
-RUN_OK, RUN_IMPACT_LIMIT, RUN_STEP_LIMIT = 0, 1, 2
+from .flight import ALPHA, C_, G, K, LAM1, LAM2, M, OM, Q_, R, SQ, W0SQ
 
 
 @jit
@@ -125,188 +120,15 @@ def _qr(j11, j12, j21, j22):
 
 
 @jit
-def tangent_run(sp, t, x, v, t_end, t_record, hmax, rate, marks, qr, imp_t, imp_v, logs,
-                max_impacts, max_steps):
-    """The exact run of simulate.run_kernel (method "exact") from (t, x, v) to t_end,
-    carrying the tangent matrix J along it.
+def tangent_product(a, jm):
+    """jm <- A jm in place, A = (a11, a12, a21, a22), jm = [j11, j12, j21, j22]."""
+    j11, j12, j21, j22 = _mul(a[0], a[1], a[2], a[3], jm[0], jm[1], jm[2], jm[3])
+    jm[0], jm[1], jm[2], jm[3] = j11, j12, j21, j22
 
-    With ``qr`` False, J is the Jacobian of the final state with respect to the initial
-    one (the product of flow Jacobians and saltation matrices; zero after sticking).
-    With ``qr`` True, J is re-orthonormalised after every impact and at each of the sorted
-    times ``marks`` (inside [t, t_end]); J restarts as the identity at marks[0], and
-    log|R11|, log|R22| of the QR steps between marks[i] and marks[i+1] add up in logs[i].
 
-    Impacts inside [t_record, t_end] go to imp_t, imp_v (as many as they hold).
-
-    Returns
-    -------
-    (status, n_rec, n_tot, t, x, v, stuck, nsteps, j11, j12, j21, j22, stuck_marked,
-     n_marked, vmin, n_tail) : stuck_marked is True when the mass sticks at some time after
-     marks[0] (the exponents are -inf), n_marked counts the impacts after marks[0],
-     vmin is the smallest |v-| of the impacts after marks[0] (of all, without marks),
-     n_tail counts the chatters summed to their accumulation point.
-    """
-    g = sp[G]
-    r = sp[R]
-    cap = imp_t.shape[0]
-    nm = marks.shape[0]
-    n_rec = 0
-    n_tot = 0
-    nsteps = 0
-    status = RUN_OK
-    stuck = False
-    stuck_marked = False
-    n_marked = 0
-    n_tail = 0
-    vmin = math.inf
-    j11, j12, j21, j22 = 1.0, 0.0, 0.0, 1.0
-    tq = t            # time the tangent has reached
-    # the impact search of run_kernel, hop prediction included, so that the run (and
-    # the diagram rows of a Lyapunov sweep) are the same to the last bit
-    grid = search_grid(sp, rate)
-    hop_v = np.full(HOP_MEMORY, -1.0)
-    hop_s = np.zeros(HOP_MEMORY)
-    n_hop = 0
-    im = 0            # next mark
-    if nm == 0:
-        t_mark0 = -math.inf
-    else:
-        t_mark0 = marks[0]
-    # the initial state may be on the wall (as run_kernel)
-    if x <= g:
-        x = g
-        if v < 0.0:
-            if t >= t_record:
-                if n_rec < cap:
-                    imp_t[n_rec] = t
-                    imp_v[n_rec] = v
-                n_rec += 1
-            n_tot += 1
-            s11, s12, s21, s22 = saltation(sp, t, v)
-            j11, j12, j21, j22 = _mul(s11, s12, s21, s22, j11, j12, j21, j22)
-            v = -r * v
-        if v <= 0.0:
-            v = 0.0
-        mode, tn = impact_outcome(sp, t, v, rate, TAIL_TOL)
-        if mode == STICK:
-            t = tn
-            v = 0.0
-            stuck = True
-            j11, j12, j21, j22 = 0.0, 0.0, 0.0, 0.0
-    while True:
-        # the tangent follows the state: when stuck its time is the stuck state's
-        if stuck:
-            tr = release_time(sp, t)
-            te = min(tr, t_end)
-            if te > t_mark0:
-                stuck_marked = True
-            j11, j12, j21, j22 = 0.0, 0.0, 0.0, 0.0
-            while im < nm and marks[im] <= te:
-                if qr and im == 0:
-                    j11, j12, j21, j22 = 1.0, 0.0, 0.0, 1.0
-                im += 1
-            tq = te
-            j11, j12, j21, j22 = 0.0, 0.0, 0.0, 0.0
-            if tr >= t_end:
-                t = t_end
-                break
-            t = tr
-            x = g
-            v = 0.0
-            stuck = False
-            continue
-        if t >= t_end:
-            break
-        seg = start_segment(sp, t, x, v)
-        guess = -1.0
-        best = HOP_MATCH_RTOL * v
-        for jh in range(HOP_MEMORY):
-            if abs(hop_v[jh] - v) < best:
-                best = abs(hop_v[jh] - v)
-                guess = hop_s[jh]
-        kind, s, vh, ns = next_impact_grid(sp, seg, t_end - t, hmax, max_steps - nsteps,
-                                           grid, guess)
-        if kind == IMPACT and v > 0.0:
-            hop_v[n_hop % HOP_MEMORY] = v
-            hop_s[n_hop % HOP_MEMORY] = s
-            n_hop += 1
-        th = t + s
-        started_at_rest = s == 0.0 and x <= g and v == 0.0
-        nsteps += ns
-        # the tangent up to th, through the marks on the way
-        while im < nm and marks[im] <= th:
-            p11, p12, p21, p22 = flow_jacobian(sp, marks[im] - tq)
-            j11, j12, j21, j22 = _mul(p11, p12, p21, p22, j11, j12, j21, j22)
-            tq = marks[im]
-            if qr:
-                if im == 0:
-                    j11, j12, j21, j22 = 1.0, 0.0, 0.0, 1.0
-                else:
-                    j11, j12, j21, j22, l1, l2 = _qr(j11, j12, j21, j22)
-                    logs[im - 1, 0] += l1
-                    logs[im - 1, 1] += l2
-            im += 1
-        p11, p12, p21, p22 = flow_jacobian(sp, th - tq)
-        j11, j12, j21, j22 = _mul(p11, p12, p21, p22, j11, j12, j21, j22)
-        tq = th
-        if kind != IMPACT:
-            x, v, ae, je, rhe, sce = flight_state(sp, seg, s)
-            t = th
-            if kind == STEP_LIMIT:
-                status = RUN_STEP_LIMIT
-            break
-        t = th
-        x = g
-        if not (started_at_rest and vh == 0.0):
-            n_tot += 1
-            if t >= t_record:
-                if n_rec < cap:
-                    imp_t[n_rec] = t
-                    imp_v[n_rec] = vh
-                n_rec += 1
-            if t >= t_mark0:
-                n_marked += 1
-                vmin = min(vmin, -vh)
-            s11, s12, s21, s22 = saltation(sp, t, vh)
-            j11, j12, j21, j22 = _mul(s11, s12, s21, s22, j11, j12, j21, j22)
-            if qr:
-                # every impact (also in the transient, where only overflow matters)
-                j11, j12, j21, j22, l1, l2 = _qr(j11, j12, j21, j22)
-                if 0 < im < nm:
-                    logs[im - 1, 0] += l1
-                    logs[im - 1, 1] += l2
-        vplus = -r * vh
-        if vplus <= 0.0:
-            vplus = 0.0
-        mode, tn = impact_outcome(sp, t, vplus, rate, TAIL_TOL)
-        if mode == STICK:
-            if tn > t:
-                n_tail += 1
-            t = tn
-            v = 0.0
-            stuck = True
-        else:
-            v = vplus
-        if n_tot >= max_impacts:
-            status = RUN_IMPACT_LIMIT
-            break
-        if nsteps >= max_steps:
-            status = RUN_STEP_LIMIT
-            break
-    # remaining marks (at t_end) when the run ended in flight
-    while im < nm and marks[im] <= t_end and not stuck and status == RUN_OK:
-        p11, p12, p21, p22 = flow_jacobian(sp, marks[im] - tq)
-        j11, j12, j21, j22 = _mul(p11, p12, p21, p22, j11, j12, j21, j22)
-        tq = marks[im]
-        if qr:
-            if im == 0:
-                j11, j12, j21, j22 = 1.0, 0.0, 0.0, 1.0
-            else:
-                j11, j12, j21, j22, l1, l2 = _qr(j11, j12, j21, j22)
-                logs[im - 1, 0] += l1
-                logs[im - 1, 1] += l2
-        im += 1
-    if stuck:
-        j11, j12, j21, j22 = 0.0, 0.0, 0.0, 0.0
-    return (status, n_rec, n_tot, t, x, v, stuck, nsteps, j11, j12, j21, j22, stuck_marked,
-            n_marked, vmin, n_tail)
+@jit
+def qr_step(jm):
+    """jm <- Q of jm = Q R in place; returns (log|R11|, log|R22|)."""
+    q11, q12, q21, q22, l1, l2 = _qr(jm[0], jm[1], jm[2], jm[3])
+    jm[0], jm[1], jm[2], jm[3] = q11, q12, q21, q22
+    return l1, l2
