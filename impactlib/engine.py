@@ -49,7 +49,7 @@ _STEP_LIMIT = int(RunStatus.STEP_LIMIT)
 _OUTPUT_FULL = int(RunStatus.OUTPUT_FULL)
 
 #: What a run fills in place: impacts in [t_record, t_end] (as many as imp_t holds; more
-#: are counted, not kept), sticking intervals clipped to the window (n, 2), the state at
+#: are counted, not kept, and flagged OUTPUT_FULL unless imp_t is empty), sticking intervals clipped to the window (n, 2), the state at
 #: the sorted sample times pc_t and d_t (inside the window), the tangent's marks and the
 #: logs of its QR steps (len(marks) - 1, 2).
 Buffers = namedtuple("Buffers", "imp_t imp_v stick pc_t pc_x pc_v d_t d_x d_v marks logs")
@@ -319,7 +319,8 @@ def run_engine(sp, ctl, t, x, v, buf, res):
             tq, im = _tangent_to(sp, jm, marks[im], tq, marks, logs, im, qr)
     if stuck:
         jm[:] = 0.0
-    if status == _OK and n_rec > cap:
+    if status == _OK and 0 < cap < n_rec:
+        # an empty imp_t asks for the counts only
         status = _OUTPUT_FULL
     res[STATUS] = status
     res[N_REC] = n_rec
