@@ -18,7 +18,7 @@ import time
 import numpy as np
 
 import impactlib as il
-from impactlib.classify import describe
+from impactlib.analysis.classify import describe
 
 from .settings import SWEEP_RANGES
 from .state import Run

@@ -24,7 +24,7 @@ import numpy as np
 import panel as pn
 
 import impactlib as il
-from impactlib.lyapunov import lyapunov_from
+from impactlib.analysis.lyapunov import lyapunov_from
 
 from .compute import scene_limits
 from .state import Run

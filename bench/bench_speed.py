@@ -36,7 +36,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "bench"))
 
 import impactlib as il  # noqa: E402
-from impactlib.classify import describe  # noqa: E402
+from impactlib.analysis.classify import describe  # noqa: E402
 
 PAPER = il.Params(m=1.0, c=0.05, k=1.0, g=0.0, r=0.8, omega=2.0)
 T_END, T_RECORD = 500.0, 250.0
@@ -398,7 +398,7 @@ def bench_dask(cfg):
     against the same map run locally on 2 threads."""
     from dask.distributed import Client, LocalCluster
 
-    from impactlib import distributed as ild
+    from impactlib.sweeps import distributed as ild
     n = cfg["dask_n"]
     wx, wy = regime_grid(n)
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=True,

@@ -7,11 +7,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import engine as E
-from ._jit import jit
-from .engine import METHOD_IDS, Buffers
-from .events import step_cap
-from .flight import fastest_rate, system_constants
+from .kernels import engine as E
+from .kernels._jit import jit
+from .kernels.engine import METHOD_IDS, Buffers
+from .kernels.events import step_cap
+from .kernels.flight import fastest_rate, system_constants
 from .model import RUN_MESSAGES, Params, RunLimits, RunStatus, check_run
 
 

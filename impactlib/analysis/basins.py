@@ -30,14 +30,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._jit import jit
+from ..kernels._jit import jit
 from .classify import MAX_PERIOD, classify, describe
-from .flight import FA, OM
-from .model import Params, RunLimits
-from . import engine as E
-from .engine import Buffers
-from .model import RunStatus
-from .simulate import run_constants, simulate
+from ..kernels.flight import FA, OM
+from ..model import Params, RunLimits
+from ..kernels import engine as E
+from ..kernels.engine import Buffers
+from ..model import RunStatus
+from ..simulate import run_constants, simulate
 
 SETTLE_RTOL = 1e-6         # settling tolerance, relative to the grid's scale (see _scale)
 ROUND_RTOL = 1e-10         # error floor: rounding accumulated over an orbit's flights and
@@ -481,7 +481,7 @@ def _scale(p, xr, vr):
 
 
 def _run_tasks(fn, args_list, workers):
-    from .sweeps import _executor, worker_count
+    from ..sweeps.diagrams import _executor, worker_count
 
     args_list = list(args_list)
     if workers == 1:

@@ -17,10 +17,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._jit import jit
-from .events import HMAX_PERIODS_RESONANCE
+from ..kernels._jit import jit
+from ..kernels.events import HMAX_PERIODS_RESONANCE
 from .lyapunov import grows_without_bound, lyapunov_from, no_dissipation
-from .model import RunLimits
+from ..model import RunLimits
 
 PERIOD_RTOL = 1e-4    # transients of the paper's damping (c = 0.05) decay to ~1e-5 in 250 s
 MAX_PERIOD = 32

@@ -24,11 +24,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._jit import jit
-from .model import Params, RunLimits, RunStatus, check_run
-from . import engine as E
-from .engine import Buffers
-from .simulate import run_constants
+from ..kernels._jit import jit
+from ..model import Params, RunLimits, RunStatus, check_run
+from ..kernels import engine as E
+from ..kernels.engine import Buffers
+from ..simulate import run_constants
 
 WINDOWS = 10
 GROWTH = 1.25        # last quarter's largest |v| over the first's: unbounded (no dissipation)
@@ -244,7 +244,7 @@ def bifurcation_with_lyapunov(p, name, values, t_end, t_record, method, x0, v0, 
     come with the largest exponent of each value over the diagram's own window."""
     import time
 
-    from . import sweeps
+    from ..sweeps import diagrams as sweeps
 
     if method != "exact":
         raise ValueError(f"lyapunov=True needs method='exact' (got method={method!r}): the "

@@ -13,9 +13,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import engine as E
-from .model import PARAM_NAMES, Params, RunLimits
-from .simulate import run_constants, simulate
+from ..kernels import engine as E
+from ..model import PARAM_NAMES, Params, RunLimits
+from ..simulate import run_constants, simulate
 
 NEWTON_MAX = 40
 NEWTON_TOL = 1e-11          # residual, relative to the orbit's size (and 1)

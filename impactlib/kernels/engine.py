@@ -23,7 +23,7 @@ from ._jit import jit
 from .events import IMPACT, NGRID, STEP_LIMIT, STICK, impact_outcome, next_impact_grid, search_grid
 from .flight import G, R, T0, flight_state, release_time, start_segment
 from .integrators import advance_rk4, advance_rk45
-from .model import RunStatus
+from ..model import RunStatus
 from .tangent import flow_jacobian, qr_step, saltation, tangent_product
 
 HOP_MEMORY = 8           # hops remembered for predicting the next one

@@ -19,14 +19,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._jit import jit
-from .classify import MAX_PERIOD, PERIOD_RTOL, Motion, classify, describe, motion_class
-from .events import step_caps
-from .flight import G, OM, system_constants_rows
-from .model import PARAM_NAMES, Params, RunLimits, check_run, fastest_rate, rk4_stability_limits
-from . import engine as E
-from .engine import METHOD_IDS, Buffers
-from .simulate import section_times, simulate
+from ..kernels._jit import jit
+from ..analysis.classify import MAX_PERIOD, PERIOD_RTOL, Motion, classify, describe, motion_class
+from ..kernels.events import step_caps
+from ..kernels.flight import G, OM, system_constants_rows
+from ..model import PARAM_NAMES, Params, RunLimits, check_run, fastest_rate, rk4_stability_limits
+from ..kernels import engine as E
+from ..kernels.engine import METHOD_IDS, Buffers
+from ..simulate import section_times, simulate
 
 CAP_PER_VALUE = 4096        # impacts kept per value; more are counted, flagged in status
 _POOL_LOCK = threading.Lock()
@@ -401,7 +401,7 @@ def bifurcation(p: Params, name: str, values, t_end: float = 500.0, t_record: fl
         ``n_impacts`` aligned with ``values`` (worst status and total over directions).
     """
     if lyapunov:
-        from .lyapunov import bifurcation_with_lyapunov
+        from ..analysis.lyapunov import bifurcation_with_lyapunov
         return bifurcation_with_lyapunov(p, name, values, t_end, t_record, method, x0, v0,
                                          warm_start, dt, rtol, atol, workers, cap_per_value,
                                          max_impacts, max_steps)

@@ -37,9 +37,9 @@ from pathlib import Path
 import numpy as np
 
 from .compare import V_FLOOR, Comparison, impact_errors, match_impacts  # noqa: F401 (re-exported)
-from .model import Params, rk4_stability_limit
+from ..model import Params, rk4_stability_limit
 from .reference import ReferenceNotApplicable, ivp_impacts, mp_impacts, mp_state
-from .simulate import simulate
+from ..simulate import simulate
 
 PAPER = Params(m=1.0, c=0.05, k=1.0, g=0.0, r=0.8, omega=2.0)
 DENSE = 200

@@ -1,4 +1,4 @@
-"""The one event loop (impactlib.engine): callable from other jitted code, the same run
+"""The one event loop (impactlib.kernels.engine): callable from other jitted code, the same run
 as simulate() for every method, and its carried tangent equal to central finite
 differences of its own final state, with the determinant identity det J = r^(2 m)
 exp(-2 c tau / m) (Müller 1995) over m impacts in a flight time tau."""
@@ -9,9 +9,9 @@ import pytest
 from numba import njit
 
 import impactlib as il
-from impactlib import engine as E
-from impactlib.flight import fastest_rate, system_constants
-from impactlib.events import step_cap
+from impactlib.kernels import engine as E
+from impactlib.kernels.flight import fastest_rate, system_constants
+from impactlib.kernels.events import step_cap
 
 from core_helpers import PAPER
 

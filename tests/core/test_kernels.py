@@ -9,9 +9,9 @@ import pytest
 from numba import njit
 
 import impactlib as il
-from impactlib import events as E
-from impactlib import flight as F
-from impactlib.reference import mp_state
+from impactlib.kernels import events as E
+from impactlib.kernels import flight as F
+from impactlib.verify.reference import mp_state
 
 from core_helpers import EPS, PAPER
 
@@ -146,7 +146,7 @@ def test_searches_do_not_invent_an_impact_at_a_near_miss(delta):
 def test_short_hops_match_the_certified_walk_and_mpmath():
     """Chatter hops at omega = 0.2 taken by the Taylor short hop agree with the certified
     walk and with the mpmath reference's first impact from the same start."""
-    from impactlib.reference import mp_impacts
+    from impactlib.verify.reference import mp_impacts
 
     p = PAPER.replace(omega=0.2)
     sp = constants(p)
