@@ -48,5 +48,12 @@ class _MovedFinder(importlib.abc.MetaPathFinder):
 
 
 def install(package: str) -> None:
+    """Register the flat paths of the modules loaded already (an alias loaded later would
+    be set as an attribute of the package, over a function of the same name such as
+    ``impactlib.classify``), and a finder for the rest."""
+    for old, new in MOVED.items():
+        mod = sys.modules.get(f"{package}.{new}")
+        if mod is not None:
+            sys.modules.setdefault(f"{package}.{old}", mod)
     if not any(isinstance(f, _MovedFinder) for f in sys.meta_path):
         sys.meta_path.append(_MovedFinder(package))

@@ -37,6 +37,7 @@ from ..model import Params, RunLimits
 from ..kernels import engine as E
 from ..kernels.engine import Buffers
 from ..model import RunStatus
+from ..parallel import run_tasks
 from ..simulate import run_constants, simulate
 
 SETTLE_RTOL = 1e-6         # settling tolerance, relative to the grid's scale (see _scale)
@@ -474,33 +475,6 @@ def _scale(p, xr, vr):
                1e-300)
 
 
-# ------------------------------------------------------------- pool adapter
-# The one place that knows how work reaches the sweeps' thread pool: run independent
-# tasks, at most ``ahead`` queued, results in submission order; closing the generator
-# cancels what has not started.
-
-
-def _run_tasks(fn, args_list, workers):
-    from ..sweeps.diagrams import _executor, worker_count
-
-    args_list = list(args_list)
-    if workers == 1:
-        for args in args_list:
-            yield fn(*args)
-        return
-    ex = _executor(workers)
-    ahead = 2 * (workers or worker_count())
-    pending = []
-    nxt = 0
-    try:
-        while nxt < len(args_list) or pending:
-            while nxt < len(args_list) and len(pending) < ahead:
-                pending.append(ex.submit(fn, *args_list[nxt]))
-                nxt += 1
-            yield pending.pop(0).result()
-    finally:
-        for f in pending:
-            f.cancel()
 
 
 # ------------------------------------------------------------------ drivers
@@ -699,7 +673,7 @@ def _iter(p, xr, vr, nx, nv, phase, max_periods, n_window, rows_per_block, worke
     args = [(reg, sp, rate, hmax, phase, xs, vs[a:b], *common) for a, b in zip(starts, stops)]
     done = 0
     stopped = False
-    gen = _run_tasks(_block, args, workers)
+    gen = run_tasks(_block, args, workers)
     try:
         for a, res in zip(starts, gen):
             outcome, n_out, m_out, chat, pts, err, box, fin, used = res

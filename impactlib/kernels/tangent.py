@@ -46,8 +46,6 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-
 from ._jit import jit
 from .flight import ALPHA, C_, G, K, LAM1, LAM2, M, OM, Q_, R, SQ, W0SQ
 

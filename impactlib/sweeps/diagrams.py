@@ -10,10 +10,7 @@ end and several callers (app sessions) share the cores instead of oversubscribin
 from __future__ import annotations
 
 import math
-import os
-import threading
 import time
-from concurrent.futures import ThreadPoolExecutor
 import dataclasses
 from dataclasses import dataclass
 
@@ -21,48 +18,18 @@ import numpy as np
 
 from ..kernels._jit import jit
 from ..analysis.classify import MAX_PERIOD, PERIOD_RTOL, Motion, classify, describe, motion_class
+from ..analysis.lyapunov import grows_without_bound
 from ..kernels.events import step_caps
 from ..kernels.flight import G, OM, system_constants_rows
-from ..model import PARAM_NAMES, Params, RunLimits, check_run, fastest_rate, rk4_stability_limits
+from ..model import (PARAM_NAMES, Params, RunLimits, RunStatus, check_run, fastest_rate,
+                     rk4_stability_limits)
 from ..kernels import engine as E
 from ..kernels.engine import METHOD_IDS, Buffers
+from ..parallel import executor as _executor
+from ..parallel import run_blocks, worker_count
 from ..simulate import section_times, simulate
 
 CAP_PER_VALUE = 4096        # impacts kept per value; more are counted, flagged in status
-_POOL_LOCK = threading.Lock()
-_POOL: ThreadPoolExecutor | None = None
-
-
-def worker_count() -> int:
-    return max(1, int(os.environ.get("IMPACTLIB_WORKERS", os.cpu_count() or 1)))
-
-
-def _pool() -> ThreadPoolExecutor:
-    global _POOL
-    with _POOL_LOCK:
-        if _POOL is None:
-            _POOL = ThreadPoolExecutor(max_workers=worker_count(), thread_name_prefix="impactlib")
-        return _POOL
-
-
-class _Inline:
-    """Executor stand-in that runs each task at once, in the caller's thread."""
-
-    class _Done:
-        def __init__(self, value):
-            self._value = value
-
-        def result(self):
-            return self._value
-
-    def submit(self, fn, *args, **kwargs):
-        return self._Done(fn(*args, **kwargs))
-
-
-def _executor(workers):
-    """The pool for tasks that are whole jobs of their own (the Lyapunov strip's chunks,
-    basin blocks, a regime map's classify pass); inline for ``workers=1``."""
-    return _Inline() if workers == 1 else _pool()
 
 
 @jit
@@ -319,37 +286,16 @@ def run_jobs(sps, hmaxs, rates, x0s, v0s, *, method, t_end, t_record, dt, rtol, 
     """
     n = sps.shape[0]
     order = interleaved(n) if order is None else np.asarray(order)
-    workers = worker_count() if workers is None else max(1, int(workers))
-    max_block = max(1, BLOCK_OUTPUT // max(1, cap))
-    lock = threading.Lock()
-    state = {"next": 0, "done": 0}
 
-    def take():
-        with lock:
-            a = state["next"]
-            if a >= n or (cancel is not None and cancel.is_set()):
-                return None
-            b = min(n, a + max(1, min(max_block, (n - a) // (4 * workers))))
-            state["next"] = b
-            return order[a:b]
+    def run_block(idx):
+        res = _run_rows(sps[idx], hmaxs[idx], rates[idx], method=method, x0s=x0s[idx],
+                        v0=v0s[idx], t_end=t_end, t_record=t_record, dt=dt, rtol=rtol,
+                        atol=atol, classify=classify, warm=False, cap=cap,
+                        max_impacts=max_impacts, max_steps=max_steps)
+        on_block(idx, *res)
 
-    def drain():
-        ran = 0
-        while True:
-            idx = take()
-            if idx is None:
-                return ran
-            res = _run_rows(sps[idx], hmaxs[idx], rates[idx], method=method, x0s=x0s[idx],
-                            v0=v0s[idx], t_end=t_end, t_record=t_record, dt=dt, rtol=rtol,
-                            atol=atol, classify=classify, warm=False, cap=cap,
-                            max_impacts=max_impacts, max_steps=max_steps)
-            on_block(idx, *res)
-            ran += idx.size
-
-    if workers == 1 or n <= 1:
-        return drain()
-    futs = [_pool().submit(drain) for _ in range(min(workers, n))]
-    return sum(f.result() for f in futs)
+    return run_blocks(n, run_block, order=order, max_block=max(1, BLOCK_OUTPUT // max(1, cap)),
+                      workers=workers, cancel=cancel)
 
 
 def _rows(values, order, T_of, out_t, out_v, counts, direction):
@@ -401,7 +347,6 @@ def bifurcation(p: Params, name: str, values, t_end: float = 500.0, t_record: fl
         ``n_impacts`` aligned with ``values`` (worst status and total over directions).
     """
     if lyapunov:
-        from ..analysis.lyapunov import bifurcation_with_lyapunov
         return bifurcation_with_lyapunov(p, name, values, t_end, t_record, method, x0, v0,
                                          warm_start, dt, rtol, atol, workers, cap_per_value,
                                          max_impacts, max_steps)
@@ -431,7 +376,7 @@ def bifurcation(p: Params, name: str, values, t_end: float = 500.0, t_record: fl
             order = srt if d > 0 else srt[::-1]
             run = (lambda order=order: _run_rows(sps[order], hmaxs[order], rates[order],
                                                  x0s=x0s[order], v0=v0, warm=True, **common))
-            jobs.append((d, order, _pool().submit(run) if workers != 1 else _Done(run())))
+            jobs.append((d, order, _executor(workers).submit(run)))
         for d, order, fut in jobs:
             out_t, out_v, counts, st, _, _ = fut.result()
             parts.append((order, st, counts, _rows(values, order, T_of, out_t, out_v, counts, d)))
@@ -442,16 +387,6 @@ def bifurcation(p: Params, name: str, values, t_end: float = 500.0, t_record: fl
         run_jobs(sps, hmaxs, rates, x0s, np.full(n, v0), on_block=collect, workers=workers,
                  **common)
     return merge_parts(name, values, parts, time.perf_counter() - tic)
-
-
-class _Done:
-    """A finished job with the interface of a Future."""
-
-    def __init__(self, value):
-        self._value = value
-
-    def result(self):
-        return self._value
 
 
 def merge_parts(name, values, parts, elapsed) -> Bifurcation:
@@ -527,3 +462,133 @@ def regime_map(p: Params, name_x: str, values_x, name_y: str, values_y,
                               max_steps=max_steps)
     return RegimeMap(name_x, vx, name_y, vy, impacts, period, status, time.perf_counter() - tic,
                      motions)
+
+
+# ------------------------------------------------------------------ the Lyapunov sweep
+
+
+@jit
+def lyapunov_sweep_kernel(sps, x0s, v0, t_end, t_record, hmaxs, rates, out_t, out_v, counts,
+                          status, finals, lyap, warm, max_impacts, max_steps):
+    """sweep_kernel (exact method, no classification) with the tangent carried
+    along by the engine: lyap[i] = (sum log|R11|, sum log|R22|, stuck in window, impacts in window)
+    of value i over its window [t0 + t_record, t0 + t_end]."""
+    nvals = sps.shape[0]
+    marks = np.empty(2)
+    logs = np.zeros((1, 2))
+    res = np.empty(E.NRES)
+    none = np.empty(0)
+    stick = np.empty((0, 2))
+    x, v, t0 = x0s[0], v0, 0.0
+    for i in range(nvals):
+        sp = sps[i]
+        om = sp[5]
+        if not warm:
+            x = x0s[i]
+        elif i > 0:
+            x = finals[i - 1, 1]
+            v = finals[i - 1, 2]
+            ph = sps[i - 1, 5] * finals[i - 1, 0]
+            ph = ph - 2.0 * math.pi * math.floor(ph / (2.0 * math.pi))
+            t0 = ph / om
+        marks[0] = t0 + t_record
+        marks[1] = t0 + t_end
+        logs[0, 0] = 0.0
+        logs[0, 1] = 0.0
+        ctl = E.controls(t0 + t_end, t0 + t_record, hmaxs[i], rates[i], 0.0, 0.0, 0.0,
+                         max_impacts, max_steps, E.EXACT, E.QR_MARKS)
+        buf = Buffers(out_t[i], out_v[i], stick, none, none, none, none, none, none, marks,
+                      logs)
+        st = E.run_engine(sp, ctl, t0, x, v, buf, res)
+        counts[i] = int(res[E.N_REC])
+        status[i] = st
+        finals[i, 0] = res[E.T_F]
+        finals[i, 1] = res[E.X_F]
+        finals[i, 2] = res[E.V_F]
+        finals[i, 3] = res[E.STUCK]
+        lyap[i, 0] = logs[0, 0]
+        lyap[i, 1] = logs[0, 1]
+        lyap[i, 2] = res[E.STUCK_MARKED]
+        lyap[i, 3] = res[E.N_MARKED]
+
+
+def largest_exponents(sps_c, sps_r, lyap, status, tau, out_t, out_v, counts, t_lo, t_hi):
+    """The largest exponent per value from the sweep kernel's sums: -inf where the motion
+    sticks in the window, NaN where it grows without bound or stopped at a work limit."""
+    lam = np.maximum(lyap[:, 0], lyap[:, 1]) / tau
+    lam = np.where(lyap[:, 2] > 0, -math.inf, lam)
+    lam = np.where(status == RunStatus.IMPACT_LIMIT, math.nan, lam)
+    lam = np.where(status == RunStatus.STEP_LIMIT, math.nan, lam)
+    for i in np.flatnonzero((sps_c == 0.0) & (sps_r == 1.0)):
+        k = min(counts[i], out_t.shape[1])
+        if grows_without_bound(out_t[i, :k], out_v[i, :k], t_lo[i], t_hi[i]):
+            lam[i] = math.nan
+    return lam
+
+
+def bifurcation_with_lyapunov(p, name, values, t_end, t_record, method, x0, v0, warm_start,
+                              dt, rtol, atol, workers, cap_per_value, max_impacts, max_steps):
+    """:func:`impactlib.bifurcation` with ``lyapunov=True``: the same runs (the exact
+    kernels, the same scheduling) with the tangent carried along, so the diagram's rows
+    come with the largest exponent of each value over the diagram's own window."""
+    if method != "exact":
+        raise ValueError(f"lyapunov=True needs method='exact' (got method={method!r}): the "
+                         "exponents come from the exact flow and saltation Jacobians")
+    t_end, t_record, x0c, v0, _, dt, rtol, atol = _check_sweep(
+        p, [name], t_end, t_record, x0, v0, method, dt, rtol, atol)
+    values = _values_array(name, values)
+    if warm_start not in (False, True, "up", "down", "both"):
+        raise ValueError(f"warm_start={warm_start!r} must be False, 'up', 'down' or 'both'")
+    if not t_record < t_end:
+        raise ValueError(f"invalid sweep: t_record={t_record!r} must be < t_end={t_end!r} "
+                         "for Lyapunov exponents over [t_record, t_end]")
+    tic = time.perf_counter()
+    ex = _executor(workers)
+    n = values.size
+    sps, hmaxs, rates = _param_rows(p, {name: values}, method, dt, x0)
+    T_of = 2 * math.pi / sps[:, 5]
+    if x0 is not None:
+        x0s = np.full(n, x0c)
+    elif name == "g":
+        x0s = np.maximum(0.0, values)
+    else:
+        x0s = np.full(n, max(0.0, p.g))
+
+    def run(order, warm):
+        k = order.size
+        out_t = np.empty((k, cap_per_value))
+        out_v = np.empty((k, cap_per_value))
+        counts = np.zeros(k, dtype=np.int64)
+        status = np.zeros(k, dtype=np.int64)
+        finals = np.zeros((k, 4))
+        lyap = np.zeros((k, 4))
+        lyapunov_sweep_kernel(sps[order], np.ascontiguousarray(x0s[order]), v0, t_end, t_record,
+                              hmaxs[order], rates[order], out_t, out_v, counts, status, finals,
+                              lyap, warm, max_impacts, max_steps)
+        status = np.where((status == RunStatus.OK) & (counts > cap_per_value),
+                          RunStatus.OUTPUT_FULL, status)
+        t0 = finals[:, 0] - t_end
+        lam = largest_exponents(sps[order, 1], sps[order, 4], lyap, status, t_end - t_record,
+                                out_t, out_v, counts, t0 + t_record, t0 + t_end)
+        return out_t, out_v, counts, status, lam
+
+    jobs = []
+    if warm_start:
+        srt = np.argsort(values, kind="stable")
+        for d in {"up": [1], True: [1], "down": [-1], "both": [1, -1]}[warm_start]:
+            order = srt if d > 0 else srt[::-1]
+            jobs.append((d, order, ex.submit(run, order, True)))
+    else:
+        nchunks = min(n, max(4 * (workers or worker_count()), int(math.ceil(n / 128))))
+        for j in range(nchunks):
+            order = np.arange(j, n, nchunks)
+            jobs.append((0, order, ex.submit(run, order, False)))
+    parts = []
+    lam_all = np.full(n, -math.inf)
+    for d, order, fut in jobs:
+        out_t, out_v, counts, st, lam = fut.result()
+        parts.append((order, st, counts, _rows(values, order, T_of, out_t, out_v, counts, d)))
+        # warm "both": the larger of the two directions' exponents (NaN if either is)
+        lam_all[order] = np.maximum(lam_all[order], lam)
+    bif = merge_parts(name, values, parts, time.perf_counter() - tic)
+    return dataclasses.replace(bif, lyapunov=lam_all)
