@@ -54,7 +54,7 @@ def _timed(run: Run, method: str) -> tuple[float, str]:
         tic = time.perf_counter()
         sol = il.simulate(run.params, **kw)
         times.append(time.perf_counter() - tic)
-    return float(np.median(times)), ("" if sol.status == 0 else str(sol.message))
+    return float(np.median(times)), ("" if sol.status == il.RunStatus.OK else str(sol.message))
 
 
 def compare_methods(run: Run) -> list[MethodResult]:

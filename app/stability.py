@@ -108,7 +108,7 @@ def settled_orbit(p: il.Params, x0, v0: float, t_end: float, t_record: float):
     sol = il.simulate(p, t_end=t_end, t_record=t_record, x0=x0, v0=v0, phase=0.0,
                       limits=scene_limits("exact"))
     px, pv = np.asarray(sol.poincare.x), np.asarray(sol.poincare.v)
-    n = repeat_period(px, pv) if sol.status == 0 else 0
+    n = repeat_period(px, pv) if sol.status == il.RunStatus.OK else 0
     if n == 0:
         return None, sol
     return orbit_at(p, n, float(px[-1]), float(pv[-1]), SAME_ORBIT_RTOL), sol

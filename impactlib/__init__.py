@@ -13,7 +13,8 @@ from .analysis.classify import Motion, classify
 from .analysis.continuation import Branch, Event, continuation
 from .analysis.lyapunov import Lyapunov, lyapunov
 from .analysis.orbits import PeriodicOrbit, periodic_orbit
-from .model import FIELDS, METHODS, PARAM_NAMES, Params, RunLimits, rk4_stability_limit
+from .model import (FIELDS, METHODS, PARAM_NAMES, MotionCode, Params, RunLimits, RunStatus,
+                    rk4_stability_limit)
 from .simulate import Impacts, Samples, Solution, simulate
 from .sweeps.diagrams import Bifurcation, RegimeMap, bifurcation, iter_bifurcation, regime_map
 from .warmup import warmup
@@ -21,6 +22,7 @@ from .warmup import warmup
 _aliases.install(__name__)
 
 __all__ = ["FIELDS", "METHODS", "PARAM_NAMES", "Params", "RunLimits", "rk4_stability_limit",
+           "RunStatus", "MotionCode",
            "Impacts", "Samples", "Solution", "simulate", "Motion", "classify",
            "Bifurcation", "RegimeMap", "bifurcation", "iter_bifurcation", "regime_map", "warmup",
            "PeriodicOrbit", "periodic_orbit", "Lyapunov", "lyapunov",

@@ -27,6 +27,16 @@ class RunStatus(enum.IntEnum):
     OUTPUT_FULL = 3     # more impacts in the window than the output holds
 
 
+class MotionCode(enum.IntEnum):
+    """Codes in the (m, n) arrays of a classification (classify's kernel, RegimeMap)
+    where a count of impacts or periods does not apply; counts are >= 0."""
+
+    INFINITE = -1       # m: complete chattering (a chatter summed); n: no period found
+    UNDETERMINED = -2   # the record window is shorter than 4 periods
+    NOT_SETTLED = -3    # m: a transient still approaching a period-n orbit
+    UNBOUNDED = -4      # m: the impact speed grows every cycle (no dissipation)
+
+
 RUN_MESSAGES = {
     RunStatus.OK: "reached t_end",
     RunStatus.IMPACT_LIMIT: "stopped at the impact limit (max_impacts); results up to that time",

@@ -20,7 +20,11 @@ import numpy as np
 from ..kernels._jit import jit
 from ..kernels.events import HMAX_PERIODS_RESONANCE
 from .lyapunov import grows_without_bound, lyapunov_from, no_dissipation
-from ..model import RunLimits
+from ..model import MotionCode, RunLimits
+
+_INF = int(MotionCode.INFINITE)
+_UNDETERMINED = int(MotionCode.UNDETERMINED)
+_NOT_SETTLED = int(MotionCode.NOT_SETTLED)
 
 PERIOD_RTOL = 1e-4    # transients of the paper's damping (c = 0.05) decay to ~1e-5 in 250 s
 MAX_PERIOD = 32
@@ -30,17 +34,17 @@ SETTLE_R2 = 0.8       # log-distance decay this well fitted by a line counts as 
 
 @jit
 def motion_class(pc_x, pc_v, imp_t, t_end, period_T, n_chatter, rtol, max_period):
-    """(m, n) from Poincare points and impact times in the window; -1 stands for infinity,
-    m = -3 for a transient still settling onto a period-n orbit."""
+    """(m, n) from Poincare points and impact times in the window, with the codes of
+    :class:`impactlib.model.MotionCode` (INFINITE, UNDETERMINED, NOT_SETTLED)."""
     npts = pc_x.shape[0]
     if npts < 4:
-        return -2, -2          # window too short to tell
+        return _UNDETERMINED, _UNDETERMINED     # window too short to tell
     scale = 1e-300
     for i in range(npts):
         scale = max(scale, abs(pc_x[i]), abs(pc_v[i]))
     tol = rtol * scale
     half = npts // 2
-    n = -1
+    n = _INF
     for cand in range(1, max_period + 1):
         if npts - half < 2 * cand:
             break
@@ -77,10 +81,10 @@ def motion_class(pc_x, pc_v, imp_t, t_end, period_T, n_chatter, rtol, max_period
             vy = syy - sy * sy / cnt
             cxy = sxy - sx * sy / cnt
             if vx > 0.0 and vy > 0.0 and cxy < 0.0 and cxy * cxy / (vx * vy) >= SETTLE_R2:
-                return -3, cand
-        return (-1 if imp_t.shape[0] > 0 else 0), -1
+                return _NOT_SETTLED, cand
+        return (_INF if imp_t.shape[0] > 0 else 0), _INF
     if n_chatter > 0:
-        return -1, n
+        return _INF, n
     t_from = t_end - n * period_T
     m = 0
     for i in range(imp_t.shape[0]):
@@ -90,7 +94,7 @@ def motion_class(pc_x, pc_v, imp_t, t_end, period_T, n_chatter, rtol, max_period
 
 
 def _inf(v):
-    return math.inf if v == -1 else v
+    return math.inf if v == MotionCode.INFINITE else v
 
 
 @dataclass(frozen=True)
@@ -108,22 +112,22 @@ class Motion:
 
 
 def describe(m: int, n: int) -> Motion:
-    """Motion from the kernel's (m, n) codes."""
-    if n == -2:
+    """Motion from the kernel's (m, n) codes (counts, or :class:`MotionCode`)."""
+    if n == MotionCode.UNDETERMINED:
         return Motion(math.nan, math.nan, "undetermined",
                       "undetermined (record window shorter than 4 periods)")
     mi, ni = _inf(m), _inf(n)
     sym = lambda v: "∞" if v == math.inf else str(int(v))  # noqa: E731
-    if m == -3:
+    if m == MotionCode.NOT_SETTLED:
         return Motion(math.nan, math.nan, "not settled",
                       f"not settled (approaching period-{n}; lengthen the transient)")
     if m == 0:
         kind = "no impact"
         label = f"no impact (period-{sym(ni)})"
-    elif n == -1:
+    elif n == MotionCode.INFINITE:
         kind = "chaotic"
         label = f"chaotic ({sym(mi)}-impact period-{sym(ni)})"
-    elif m == -1:
+    elif m == MotionCode.INFINITE:
         kind = "complete chattering"
         label = f"complete chattering (∞-impact period-{sym(ni)})"
     else:

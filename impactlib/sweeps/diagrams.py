@@ -21,8 +21,8 @@ from ..analysis.classify import MAX_PERIOD, PERIOD_RTOL, Motion, classify, descr
 from ..analysis.lyapunov import grows_without_bound
 from ..kernels.events import step_caps
 from ..kernels.flight import G, OM, system_constants_rows
-from ..model import (PARAM_NAMES, Params, RunLimits, RunStatus, check_run, fastest_rate,
-                     rk4_stability_limits)
+from ..model import (PARAM_NAMES, MotionCode, Params, RunLimits, RunStatus, check_run,
+                     fastest_rate, rk4_stability_limits)
 from ..kernels import engine as E
 from ..kernels.engine import METHOD_IDS, Buffers
 from ..parallel import executor as _executor
@@ -122,13 +122,14 @@ class Bifurcation:
 
 @dataclass(frozen=True)
 class RegimeMap:
-    """(m, n) class of each cell of a two-parameter grid; -1 stands for infinity, -2 for
-    undetermined (window too short), 0 impacts for no impact, m = -3 not settled.
+    """(m, n) class of each cell of a two-parameter grid: counts, 0 impacts for no
+    impact, or the codes of :class:`impactlib.model.MotionCode` (INFINITE -1,
+    UNDETERMINED -2, NOT_SETTLED -3, UNBOUNDED -4).
 
     Cells whose section points never repeat are judged by :func:`classify` on their own
     run (the Lyapunov criterion): ``motions[(iy, ix)]`` holds its verdict, and their codes
-    become (m, -1) chaotic, (-3, -1) not settled, (-2, -2) undetermined or (-4, -1)
-    unbounded.  :meth:`motion` and :meth:`label` read both.
+    become (m, INFINITE) chaotic, (NOT_SETTLED, INFINITE), (UNDETERMINED, UNDETERMINED)
+    or (UNBOUNDED, INFINITE).  :meth:`motion` and :meth:`label` read both.
     """
 
     name_x: str
@@ -151,14 +152,18 @@ class RegimeMap:
 
 
 # codes of classify's verdicts on aperiodic cells (RegimeMap)
-_VERDICT_CODES = {"not settled": (-3, -1), "undetermined": (-2, -2), "unbounded": (-4, -1)}
+_VERDICT_CODES = {
+    "not settled": (MotionCode.NOT_SETTLED, MotionCode.INFINITE),
+    "undetermined": (MotionCode.UNDETERMINED, MotionCode.UNDETERMINED),
+    "unbounded": (MotionCode.UNBOUNDED, MotionCode.INFINITE),
+}
 
 
 def judge_aperiodic(p, name_x, vx, name_y, vy, impacts, period, workers, **run_kw):
     """classify() of a single run (settings ``run_kw``) for each cell of a regime map
     whose points never repeated: whether it is chaotic is classify's call (one rule, the
     Lyapunov criterion).  Updates the codes in place; returns {(iy, ix): Motion}."""
-    cells = np.argwhere((period == -1) & (impacts != 0))
+    cells = np.argwhere((period == MotionCode.INFINITE) & (impacts != 0))
 
     def judge(iy, ix):
         sol = simulate(p.replace(**{name_x: float(vx[ix]), name_y: float(vy[iy])}), **run_kw)
@@ -170,7 +175,8 @@ def judge_aperiodic(p, name_x, vx, name_y, vy, impacts, period, workers, **run_k
     for (iy, ix), fut in zip(cells, futs):
         mo = fut.result()
         if mo.kind != "chaotic":
-            impacts[iy, ix], period[iy, ix] = _VERDICT_CODES.get(mo.kind, (-2, -2))
+            impacts[iy, ix], period[iy, ix] = _VERDICT_CODES.get(
+                mo.kind, _VERDICT_CODES["undetermined"])
         motions[(int(iy), int(ix))] = mo
     return motions
 
