@@ -136,6 +136,24 @@ def describe(m: int, n: int) -> Motion:
     return Motion(mi, ni, kind, label)
 
 
+def lyapunov_budget(sol) -> RunLimits:
+    """Work limits of the Lyapunov run that judges a solution's aperiodic motion: about
+    the work of the solution itself, plus the certified walk's steps (at most a quarter
+    period each) that the search falls back to near grazing."""
+    window = sol.t_end - sol.t_record
+    walk = 2 * math.ceil(window / (HMAX_PERIODS_RESONANCE * sol.params.T)) + 8 * sol.n_impacts
+    return RunLimits(max_impacts=2 * sol.n_impacts + 1000,
+                     max_steps=2 * sol.nsteps + walk + 10000)
+
+
+def measure_lyapunov(sol):
+    """Both Lyapunov exponents of the exact flow continued from where ``sol`` ends, over a
+    window as long as its own, within :func:`lyapunov_budget`."""
+    tf, xf, vf, stuck = sol.final
+    window = sol.t_end - sol.t_record
+    return lyapunov_from(sol.params, tf, xf, vf, tf + window, tf, limits=lyapunov_budget(sol))
+
+
 def classify(sol, rtol: float = PERIOD_RTOL, max_period: int = MAX_PERIOD) -> Motion:
     """Classify a Solution as the paper does: (m impacts, period n) from its maps.
 
@@ -148,25 +166,30 @@ def classify(sol, rtol: float = PERIOD_RTOL, max_period: int = MAX_PERIOD) -> Mo
     integrator (rk4, rk45) are judged against the exact flow: if that contracts, the
     integrator's error is what kept the points from repeating.
     """
+    return classify_measured(sol, rtol, max_period)[0]
+
+
+def classify_measured(sol, rtol: float = PERIOD_RTOL, max_period: int = MAX_PERIOD):
+    """(Motion, Lyapunov or None): :func:`classify` with the Lyapunov measurement it
+    made (None where the maps decided alone), for callers that show the exponents."""
     p = sol.params
     m, n = motion_class(np.ascontiguousarray(sol.poincare.x), np.ascontiguousarray(sol.poincare.v),
                         np.ascontiguousarray(sol.impacts.t), sol.t_end, p.T, sol.n_chatter,
                         rtol, max_period)
     motion = describe(m, n)
     if motion.kind != "chaotic":
-        return motion
+        return motion, None
     if no_dissipation(p) and grows_without_bound(sol.impacts.t, sol.impacts.v, sol.t_record,
                                                  sol.t_end):
         return Motion(math.nan, math.nan, "unbounded",
-                      "unbounded (no dissipation): the impact speed grows every cycle")
-    tf, xf, vf, stuck = sol.final
+                      "unbounded (no dissipation): the impact speed grows every cycle"), None
+    ly = measure_lyapunov(sol)
+    return _judged(sol, motion, ly, max_period), ly
+
+
+def _judged(sol, motion, ly, max_period) -> Motion:
+    """The verdict on an aperiodic motion from its Lyapunov measurement ``ly``."""
     window = sol.t_end - sol.t_record
-    # at most about the work of the solution itself, plus the certified walk's steps (at
-    # most a quarter period each) that the search falls back to near grazing
-    walk = 2 * math.ceil(window / (HMAX_PERIODS_RESONANCE * p.T)) + 8 * sol.n_impacts
-    budget = RunLimits(max_impacts=2 * sol.n_impacts + 1000,
-                       max_steps=2 * sol.nsteps + walk + 10000)
-    ly = lyapunov_from(p, tf, xf, vf, tf + window, tf, limits=budget)
     lam, err = float(ly.exponents[0]), float(ly.error[0])
     coarse = ""
     if sol.method != "exact":
