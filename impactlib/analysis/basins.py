@@ -151,7 +151,7 @@ def _matching_box(box, boxes, rtol):
 
 
 @jit
-def settle_starts(sp, rate, hmax, phase, x0s, v0s, settle_tol, round_tol, set_factor, huge,
+def follow_starts(sp, rate, hmax, phase, x0s, v0s, settle_tol, round_tol, set_factor, huge,
                   max_periods, max_period, n_window, chaos_boxes, box_rtol, max_impacts,
                   max_steps, outcome, n_out, m_out, chat_out, pts_out, err_out, box_out,
                   fin_out, used_out):
@@ -619,7 +619,7 @@ def _block(reg, sp, rate, hmax, phase, xs, v_rows, settle_tol, round_tol, huge, 
     box = np.zeros((k, 4))
     fin = np.zeros((k, 3))
     used = np.zeros(k, dtype=np.int64)
-    settle_starts(sp, rate, hmax, phase, x0s, v0s, settle_tol, round_tol, SET_FACTOR, huge,
+    follow_starts(sp, rate, hmax, phase, x0s, v0s, settle_tol, round_tol, SET_FACTOR, huge,
                   max_periods, MAX_PERIOD, n_window, reg.chaos_boxes, BOX_RTOL, max_impacts,
                   max_steps, outcome, n_out, m_out, chat, pts, err, box, fin, used)
     return outcome, n_out, m_out, chat, pts, err, box, fin, used
