@@ -110,7 +110,7 @@ def machine():
         "cpu": cpu + fam + hyp,
         "cores": os.cpu_count(),
         "usable_cores": len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else None,
-        "impactlib_workers": il.sweeps.worker_count(),
+        "impactlib_workers": il.sweeps.diagrams.worker_count(),
         "python": platform.python_version(),
         "numpy": np.__version__,
         "numba": numba.__version__,
@@ -439,13 +439,13 @@ def profile_diagram():
                       "chatter": int((a[sel, 4] > 0).sum())})
     # Python-side setup of a sweep: validating 1000 Params and packing constants
     tic = time.perf_counter()
-    il.sweeps._param_rows(PAPER, {"omega": OMEGAS}, "exact", None, None)
+    il.sweeps.diagrams._param_rows(PAPER, {"omega": OMEGAS}, "exact", None, None)
     setup = time.perf_counter() - tic
     # balance of run_jobs' dynamic hand-out on 2 threads, replayed with these costs:
     # blocks in its order and sizes, each to the thread that is free first
     nw = 2
-    jorder = il.sweeps.interleaved(OMEGAS.size)
-    max_block = max(1, il.sweeps.BLOCK_OUTPUT // il.sweeps.CAP_PER_VALUE)
+    jorder = il.sweeps.diagrams.interleaved(OMEGAS.size)
+    max_block = max(1, il.sweeps.diagrams.BLOCK_OUTPUT // il.sweeps.diagrams.CAP_PER_VALUE)
     free = [0.0] * nw
     a_ = 0
     n_blocks = 0
