@@ -9,7 +9,7 @@ import numpy as np
 
 from .kernels import engine as E
 from .kernels._jit import jit
-from .kernels.engine import METHOD_IDS, Buffers
+from .kernels.engine import METHOD_IDS
 from .kernels.events import step_cap
 from .kernels.flight import fastest_rate, system_constants
 from .model import RUN_MESSAGES, Params, RunLimits, RunStatus, check_run
@@ -174,11 +174,10 @@ def simulate(p: Params, t_end: float = 500.0, x0: float | None = None, v0: float
         samples[:] = np.nan
         pc_x, pc_v = samples[:n_pc], samples[n_pc:2 * n_pc]
         d_x, d_v = samples[2 * n_pc:2 * n_pc + n_d], samples[2 * n_pc + n_d:]
-        buffers = Buffers(imp_t, imp_v, stick, pc_t, pc_x, pc_v, d_t, d_x, d_v, _NO_SAMPLES,
-                          _NO_LOGS)
         ctl[E.MAX_IMPACTS] = max_impacts
         tic = time.perf_counter()
-        E.run_engine(sp, ctl, float(t0), x0, v0, buffers, res)
+        E.run_from_python(sp, ctl, float(t0), x0, v0, imp_t, imp_v, stick, pc_t, pc_x, pc_v,
+                          d_t, d_x, d_v, _NO_SAMPLES, _NO_LOGS, res)
         elapsed = time.perf_counter() - tic
         n_rec = int(res[E.N_REC])
         # more impacts in the window than the arrays held: run again with room for all of

@@ -104,11 +104,11 @@ def _sample_rest(g, t_hi, ts, xs, vs, i):
 
 
 @jit
-def _record_impact(buf, n_rec, t, vm, t_record):
+def _record_impact(imp_t, imp_v, n_rec, t, vm, t_record):
     if t >= t_record:
-        if n_rec < buf.imp_t.shape[0]:
-            buf.imp_t[n_rec] = t
-            buf.imp_v[n_rec] = vm
+        if n_rec < imp_t.shape[0]:
+            imp_t[n_rec] = t
+            imp_v[n_rec] = vm
         n_rec += 1
     return n_rec
 
@@ -160,7 +160,8 @@ def run_engine(sp, ctl, t, x, v, buf, res):
     stick = buf.stick
     marks = buf.marks
     logs = buf.logs
-    cap = buf.imp_t.shape[0]
+    imp_t, imp_v = buf.imp_t, buf.imp_v
+    cap = imp_t.shape[0]
     nm = marks.shape[0]
     n_rec = 0
     n_tot = 0
@@ -191,7 +192,7 @@ def run_engine(sp, ctl, t, x, v, buf, res):
     if x <= g:
         x = g
         if v < 0.0:
-            n_rec = _record_impact(buf, n_rec, t, v, t_record)
+            n_rec = _record_impact(imp_t, imp_v, n_rec, t, v, t_record)
             n_tot += 1
             if tangent:
                 tangent_product(saltation(sp, t, v), jm)
@@ -281,7 +282,7 @@ def run_engine(sp, ctl, t, x, v, buf, res):
         x = g
         if not (started_at_rest and vh == 0.0):
             n_tot += 1
-            n_rec = _record_impact(buf, n_rec, t, vh, t_record)
+            n_rec = _record_impact(imp_t, imp_v, n_rec, t, vh, t_record)
             if t >= t_mark0:
                 n_marked += 1
                 vmin = min(vmin, -vh)
@@ -337,3 +338,12 @@ def run_engine(sp, ctl, t, x, v, buf, res):
     res[N_MARKED] = n_marked
     res[VMIN] = vmin
     return status
+
+
+@jit
+def run_from_python(sp, ctl, t, x, v, imp_t, imp_v, stick, pc_t, pc_x, pc_v, d_t, d_x, d_v,
+                    marks, logs, res):
+    """:func:`run_engine` with the buffers as separate arrays: the entry from Python, since
+    Numba's dispatcher types a tuple of arrays much more slowly than the arrays."""
+    return run_engine(sp, ctl, t, x, v, Buffers(imp_t, imp_v, stick, pc_t, pc_x, pc_v, d_t,
+                                                  d_x, d_v, marks, logs), res)
