@@ -324,7 +324,7 @@ def markdown(rows, quick: bool, png_name: str) -> str:
         "",
         "Every method is compared with an independent reference: the closed form evaluated in",
         "mpmath at 40 digits, impacts bracketed on a dense grid with every turning point",
-        "checked and refined by safeguarded Newton (`impactlib/reference.py`). The row",
+        "checked and refined by safeguarded Newton (`impactlib/verify/reference.py`). The row",
         "`ref: solve_ivp` cross-checks that reference with scipy's DOP853 (rtol 1e-12) and a",
         "terminal event, where it applies (not through chatter, sticking or shallow dips).",
         "",
