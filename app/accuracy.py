@@ -1,7 +1,7 @@
 """Accuracy readout: error against run time of exact, rk4 and rk45 for the current scene.
 
 Computed on demand (a button), off the event loop. Impacts are matched by time with the
-core's ``impactlib.compare.match_impacts`` over the first ``HORIZON`` seconds from
+core's ``impactlib.verify.compare.match_impacts`` over the first ``HORIZON`` seconds from
 τ = 0 (beyond that, in chaotic motion, any two solutions separate for reasons that are
 not the method's). The yardstick is the exact method: the core's accuracy benchmark
 checks it against an independent mpmath reference (errors <= 1e-11 on its cases);
@@ -17,7 +17,7 @@ import time
 import numpy as np
 
 import impactlib as il
-from impactlib.compare import V_FLOOR, match_impacts
+from impactlib.verify.compare import V_FLOOR, match_impacts
 
 from . import compute
 from .settings import METHODS, method_options, method_text
@@ -54,7 +54,7 @@ def _timed(run: Run, method: str) -> tuple[float, str]:
         tic = time.perf_counter()
         sol = il.simulate(run.params, **kw)
         times.append(time.perf_counter() - tic)
-    return float(np.median(times)), ("" if sol.status == 0 else str(sol.message))
+    return float(np.median(times)), ("" if sol.status == il.RunStatus.OK else str(sol.message))
 
 
 def compare_methods(run: Run) -> list[MethodResult]:

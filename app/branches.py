@@ -27,7 +27,7 @@ import numpy as np
 
 import impactlib as il
 
-from .stability import settled_orbit
+from .stability import exact_run, settled_orbit
 from .state import Run
 
 log = logging.getLogger(__name__)
@@ -125,7 +125,7 @@ def compute(run: Run, seed_values: list[float], live=lambda: True) -> BranchSet:
             break
         done += 1
         p = run.params.replace(**{name: w})
-        orb, _ = settled_orbit(p, run.x0, run.v0, run.t_end, run.t_record)
+        orb = settled_orbit(exact_run((p, run.x0, run.v0, run.t_end, run.t_record), None))
         if (orb is None or orb.sticks or not 0 < orb.impacts < math.inf
                 or on_branch(found, orb, name, w)):
             continue

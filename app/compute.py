@@ -6,11 +6,14 @@ the run options, bounded (LRU). Everything here is plain numpy; no widgets.
 from __future__ import annotations
 
 import dataclasses
+import threading
+import weakref
 
 import numpy as np
 import panel as pn
 
 import impactlib as il
+from impactlib.analysis.classify import classify_measured
 
 from .state import Run
 
@@ -31,7 +34,11 @@ SCENE_MAX_IMPACTS = 25_000
 SCENE_MAX_STEPS = {"exact": 250_000, "rk4": 5_000_000, "rk45": 1_000_000}
 SCENE_MAX_SAMPLES = 250_000
 
-_HASH = {il.Params: lambda p: repr(p).encode()}
+#: Cache keys here are tuples of Params and plain numbers, whose repr is exact and
+#: stable: hashing it is one call, where pn.cache's own walk through the tuple
+#: (panel 1.9.4) took about half the server CPU of an omega move (bench/bench_move.py).
+KEY_HASH = {il.Params: lambda p: repr(p).encode(), "builtins.tuple": lambda t: repr(t).encode()}
+_HASH = KEY_HASH
 
 
 def scene_limits(method: str) -> il.RunLimits:
@@ -41,24 +48,74 @@ def scene_limits(method: str) -> il.RunLimits:
 
 
 @pn.cache(max_items=32, policy="LRU", hash_funcs=_HASH)
-def simulate(key: tuple, dense: int, phase: float) -> il.Solution:
-    """``il.simulate`` for ``Run.scene_key()`` (Params, then (keyword, value) pairs);
-    cached across sessions."""
+def _simulate(key: tuple, dense: int, phase: float) -> il.Solution:
     params, options = key[0], dict(key[1:])
     return il.simulate(params, dense=dense, phase=phase,
                        limits=scene_limits(options["method"]), **options)
 
 
+_FLIGHTS_LOCK = threading.Lock()
+_FLIGHTS: dict = {}
+
+
+def once_at_a_time(key, fn):
+    """fn() with callers of the same ``key`` taking turns, so that a second caller finds
+    the first one's result in its cache instead of computing it again."""
+    with _FLIGHTS_LOCK:
+        lock, users = _FLIGHTS.get(key, (None, 0))
+        lock = lock or threading.Lock()
+        _FLIGHTS[key] = (lock, users + 1)
+    try:
+        with lock:
+            return fn()
+    finally:
+        with _FLIGHTS_LOCK:
+            lock, users = _FLIGHTS[key]
+            if users == 1:
+                del _FLIGHTS[key]
+            else:
+                _FLIGHTS[key] = (lock, users - 1)
+
+
+def simulate(key: tuple, dense: int, phase: float) -> il.Solution:
+    """``il.simulate`` for ``Run.scene_key()`` (Params, then (keyword, value) pairs);
+    cached across sessions. Callers asking for the same run at once (the scene job and
+    the stability job of one move) wait for one simulation instead of running two."""
+    return once_at_a_time(("run", repr(key), dense, phase), lambda: _simulate(key, dense, phase))
+
+
+_MEASURED: dict = {}
+
+
+def classified(sol: il.Solution):
+    """``classify_measured(sol)``: the motion and the Lyapunov measurement behind it (or
+    None), once per Solution object (the scene's badge and the stability readout read
+    the same one)."""
+    def measure():
+        hit = _MEASURED.get(id(sol))
+        if hit is not None and hit[0]() is sol:
+            return hit[1]
+        got = classify_measured(sol)
+        _MEASURED[id(sol)] = (weakref.ref(sol, lambda _, k=id(sol): _MEASURED.pop(k, None)), got)
+        return got
+    return once_at_a_time(("classify", id(sol)), measure)
+
+
+def section_phase(run: Run) -> float:
+    """The Poincare section psi of ``run``, inside [0, T]."""
+    return min(max(run.psi, 0.0), run.params.T)
+
+
 def scene_solution(run: Run) -> il.Solution:
-    """The trajectory of the four scene views (dense samples, section at phase 0)."""
-    return simulate(run.scene_key(), SCENE_POINTS, 0.0)
+    """The one run of a scene: dense samples for the four scene views and the Poincare
+    section at psi in the same pass."""
+    return simulate(run.scene_key(), SCENE_POINTS, section_phase(run))
 
 
 def section_solution(run: Run) -> il.Solution:
-    """The same run sampled at the Poincare section psi: a second, impacts-only
-    simulation (no dense output), so a psi change never recomputes the trajectory."""
-    phase = min(max(run.psi, 0.0), run.params.T)
-    return simulate(run.scene_key(), 0, phase)
+    """The same run sampled at another Poincare section psi: an impacts-only simulation
+    (no dense output), so a psi change alone never recomputes the trajectory."""
+    return simulate(run.scene_key(), 0, section_phase(run))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -154,12 +211,14 @@ def build_scene(run: Run) -> SceneData:
     stick = np.asarray(sol.sticking, dtype=float).reshape(-1, 2)[-MAX_STICKING:]
     return SceneData(run=run, trajectory=trajectory_columns(sol, p.r, p.g), impacts=impacts,
                  sticking={"start": stick[:, 0].copy(), "end": stick[:, 1].copy()},
-                 label=il.classify(sol).label, elapsed=float(sol.elapsed),
+                 label=classified(sol)[0].label, elapsed=float(sol.elapsed),
                  status=int(sol.status), message=str(sol.message))
 
 
-def section_columns(run: Run) -> dict:
-    sol = section_solution(run)
+def section_columns(run: Run, sol: il.Solution | None = None) -> dict:
+    """The Poincare section of ``run`` from ``sol`` (a run of it at its psi), or from an
+    impacts-only run."""
+    sol = section_solution(run) if sol is None else sol
     ps = sol.poincare
     return {"t": last(ps.t, MAX_MAP_POINTS), "x": last(ps.x, MAX_MAP_POINTS),
             "v": last(ps.v, MAX_MAP_POINTS)}
@@ -172,8 +231,10 @@ def scene_and_section(run: Run, shown) -> tuple | ValueError:
     scene = old_scene
     try:
         if prev is None or run.scene_key() != prev.scene_key():
+            # one run for both: the scene's trajectory and its section at psi
             scene = build_scene(run)
-        if prev is None or scene is not old_scene or run.psi != prev.psi:
+            section = section_columns(run, scene_solution(run))
+        elif run.psi != prev.psi:
             section = section_columns(run)
     except ValueError as exc:
         return exc

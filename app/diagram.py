@@ -140,7 +140,8 @@ def compute_chunk(run: Run, values: np.ndarray, direction: int = 0) -> dict:
             "values": np.asarray(bif.values, dtype=float), "lyapunov": bif.lyapunov,
             "sweep": np.full(values.size, direction, dtype=np.int8),
             # 1, 2: a work limit stopped the run; 3 only means more impacts than kept
-            "partial": int(np.count_nonzero((status != 0) & (status != 3)))}
+            "partial": int(np.count_nonzero((status != il.RunStatus.OK)
+                                            & (status != il.RunStatus.OUTPUT_FULL)))}
 
 
 def merged(parts: list[dict]) -> dict:

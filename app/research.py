@@ -18,7 +18,7 @@ import time
 import numpy as np
 
 import impactlib as il
-from impactlib.classify import describe
+from impactlib.analysis.classify import describe
 
 from .settings import SWEEP_RANGES
 from .state import Run
@@ -161,7 +161,8 @@ def map_rows(req: MapRequest, wall_time: float = MAP_WALL_TIME):
         rows = min(rows, vy.size - done)
         rm = il.regime_map(run.params, req.name_x, vx, req.name_y, vy[done:done + rows],
                            rows_per_task=max(1, math.ceil(rows / (2 * workers))), **opts)
-        limited += int(np.count_nonzero((rm.status == 1) | (rm.status == 2)))
+        limited += int(np.count_nonzero((rm.status == il.RunStatus.IMPACT_LIMIT)
+                                        | (rm.status == il.RunStatus.STEP_LIMIT)))
         start, done = done, done + rows
         elapsed = time.perf_counter() - tic
         stopped = done < vy.size and elapsed > wall_time

@@ -24,9 +24,9 @@ import numpy as np
 import panel as pn
 
 import impactlib as il
-from impactlib.lyapunov import lyapunov_from
+from impactlib.analysis.classify import measure_lyapunov
 
-from .compute import scene_limits
+from . import compute
 from .state import Run
 
 #: Poincaré points closer than this (relative to the orbit's size, at least 1) count as
@@ -85,46 +85,54 @@ def repeat_period(px: np.ndarray, pv: np.ndarray, max_period: int = MAX_PERIOD) 
     return 0
 
 
-def orbit_at(p: il.Params, n: int, x: float, v: float, rtol: float):
-    """The period-n orbit through (x, v) on the section t = 0, or None: Newton from there
+def orbit_at(p: il.Params, n: int, x: float, v: float, rtol: float, phase: float = 0.0):
+    """The period-n orbit through (x, v) on the section t = phase, or None: Newton from there
     must converge and stay within ``rtol`` (relative) of it. A stable orbit of a period
     dividing n is preferred (a period-1 orbit settled onto slowly, through multipliers
     near -1, also nearly repeats after 2); an unstable one is not what the motion is on
     (just past a period doubling, the period-2 motion passes near the period-1 orbit)."""
     scale = max(1.0, abs(x), abs(v))
     for d in [d for d in range(1, n) if n % d == 0] + [n]:
-        orb = il.periodic_orbit(p, d, x0=x, v0=v, phase=0.0)
+        orb = il.periodic_orbit(p, d, x0=x, v0=v, phase=phase)
         near = orb.converged and max(abs(orb.x - x), abs(orb.v - v)) <= rtol * scale
         if near and (d == n or orb.stable):
             return orb
     return None
 
 
-def settled_orbit(p: il.Params, x0, v0: float, t_end: float, t_record: float):
-    """The periodic orbit a run from (x0, v0) has settled on by ``t_end``, or None.
-
-    Returns (orbit, solution): the orbit (``il.PeriodicOrbit`` on the section t = 0 mod T,
-    converged, on the run's last section point) or None, and the exact run."""
-    sol = il.simulate(p, t_end=t_end, t_record=t_record, x0=x0, v0=v0, phase=0.0,
-                      limits=scene_limits("exact"))
-    px, pv = np.asarray(sol.poincare.x), np.asarray(sol.poincare.v)
-    n = repeat_period(px, pv) if sol.status == 0 else 0
-    if n == 0:
-        return None, sol
-    return orbit_at(p, n, float(px[-1]), float(pv[-1]), SAME_ORBIT_RTOL), sol
-
-
-def _stability_readout(key: tuple) -> Readout:
+def exact_run(key: tuple, source) -> il.Solution:
+    """The exact run of ``readout_key`` ``key``: the scene's own run when the scene is
+    computed by the exact method (``source`` = its (scene key, section phase)), else a
+    run of its own with the section at t = 0."""
+    if source is not None:
+        return compute.simulate(source[0], compute.SCENE_POINTS, source[1])
     p, x0, v0, t_end, t_record = key
-    orb, sol = settled_orbit(p, x0, v0, t_end, t_record)
+    return il.simulate(p, t_end=t_end, t_record=t_record, x0=x0, v0=v0, phase=0.0,
+                       limits=compute.scene_limits("exact"))
+
+
+def settled_orbit(sol: il.Solution):
+    """The periodic orbit the exact run ``sol`` has settled on by its end, or None: an
+    ``il.PeriodicOrbit`` on the run's section, converged, on its last section point."""
+    px, pv = np.asarray(sol.poincare.x), np.asarray(sol.poincare.v)
+    n = repeat_period(px, pv) if sol.status == il.RunStatus.OK else 0
+    if n == 0:
+        return None
+    return orbit_at(sol.params, n, float(px[-1]), float(pv[-1]), SAME_ORBIT_RTOL, sol.phase)
+
+
+def _stability_readout(key: tuple, source) -> Readout:
+    sol = exact_run(key, source)
+    orb = settled_orbit(sol)
     settling = ""
+    ly = None
     if orb is None:
         # il.classify's looser test may see a period the strict one missed (an orbit
         # still settling, with a multiplier near the unit circle, or a period above 16)
-        motion = il.classify(sol)
+        motion, ly = compute.classified(sol)
         if motion.kind == "periodic" and math.isfinite(motion.period) and len(sol.poincare):
-            orb = orbit_at(p, int(motion.period), float(sol.poincare.x[-1]),
-                           float(sol.poincare.v[-1]), SETTLING_RTOL)
+            orb = orbit_at(sol.params, int(motion.period), float(sol.poincare.x[-1]),
+                           float(sol.poincare.v[-1]), SETTLING_RTOL, sol.phase)
             orb = orb if orb is not None and orb.stable else None
             settling = " (the motion is still settling onto it at the end of the window)"
     if orb is not None:
@@ -136,12 +144,10 @@ def _stability_readout(key: tuple) -> Readout:
             verdict = "stable" if orb.stable else "unstable (the motion is leaving it)"
         return Readout("orbit", verdict + settling, orbit=orb)
     # The label is il.classify's, which measures before it says "chaotic"; the exponents
-    # shown are the same measurement (continued from the run's end over a window as long
-    # as its own, within about the run's own work), with both exponents.
-    tf, xf, vf, _ = sol.final
-    window = sol.t_end - sol.t_record
-    budget = il.RunLimits(max_impacts=2 * sol.n_impacts + 1000, max_steps=2 * sol.nsteps + 10000)
-    ly = lyapunov_from(p, tf, xf, vf, tf + window, tf, limits=budget)
+    # shown are that measurement (made here, by the same rule, where the maps decided
+    # without one).
+    if ly is None:
+        ly = measure_lyapunov(sol)
     return Readout("exponents", motion_verdict(motion, ly), lyapunov=ly)
 
 
@@ -165,16 +171,34 @@ def motion_verdict(motion, ly) -> str:
     return text
 
 
-@pn.cache(max_items=64, policy="LRU", hash_funcs={il.Params: lambda p: repr(p).encode()})
-def stability_readout(key: tuple) -> Readout:
-    """The readout of ``readout_key(run)``, cached across sessions."""
-    return _stability_readout(key)
+@dataclass(frozen=True)
+class Source:
+    """Where the readout's exact run comes from (see :func:`exact_run`): not part of the
+    readout's cache key, since every source gives the same motion."""
+
+    scene: tuple | None
+
+
+@pn.cache(max_items=64, policy="LRU",
+          hash_funcs={il.Params: lambda p: repr(p).encode(), Source: lambda s: b"source"})
+def stability_readout(key: tuple, source: Source = Source(None)) -> Readout:
+    """The readout of ``readout_key(run)``, cached across sessions, computed from the
+    run ``source`` names on a miss."""
+    return _stability_readout(key, source.scene)
+
+
+def scene_source(run: Run) -> Source:
+    """``run``'s scene (its key and section phase) when it is the exact run the readout
+    needs."""
+    if run.method != "exact":
+        return Source(None)
+    return Source((run.scene_key(), compute.section_phase(run)))
 
 
 def readout(run: Run) -> Readout:
     """The stability readout of ``run``'s motion (a ``failed`` one instead of raising)."""
     try:
-        return stability_readout(readout_key(run))
+        return stability_readout(readout_key(run), scene_source(run))
     except ValueError as exc:
         return Readout("failed", f"no readout: {exc}")
 

@@ -53,9 +53,9 @@ def main() -> None:
     print("stability readout, uncached (median ms):")
     for omega in (2.0, 0.2, 2.8):
         key = stability.readout_key(run_of(omega=omega))
-        stability._stability_readout(key)                       # warm-up
-        ms = 1e3 * median_time(lambda: stability._stability_readout(key), reps)
-        kind = stability._stability_readout(key).kind
+        stability._stability_readout(key, None)                       # warm-up
+        ms = 1e3 * median_time(lambda: stability._stability_readout(key, None), reps)
+        kind = stability._stability_readout(key, None).kind
         print(f"  omega = {omega:<4}  {kind:<9}  {ms:8.2f} ms")
 
     run = run_of()

@@ -36,7 +36,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "bench"))
 
 import impactlib as il  # noqa: E402
-from impactlib.classify import describe  # noqa: E402
+from impactlib.analysis.classify import describe  # noqa: E402
 
 PAPER = il.Params(m=1.0, c=0.05, k=1.0, g=0.0, r=0.8, omega=2.0)
 T_END, T_RECORD = 500.0, 250.0
@@ -110,7 +110,7 @@ def machine():
         "cpu": cpu + fam + hyp,
         "cores": os.cpu_count(),
         "usable_cores": len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else None,
-        "impactlib_workers": il.sweeps.worker_count(),
+        "impactlib_workers": il.sweeps.diagrams.worker_count(),
         "python": platform.python_version(),
         "numpy": np.__version__,
         "numba": numba.__version__,
@@ -398,7 +398,7 @@ def bench_dask(cfg):
     against the same map run locally on 2 threads."""
     from dask.distributed import Client, LocalCluster
 
-    from impactlib import distributed as ild
+    from impactlib.sweeps import distributed as ild
     n = cfg["dask_n"]
     wx, wy = regime_grid(n)
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
@@ -439,13 +439,13 @@ def profile_diagram():
                       "chatter": int((a[sel, 4] > 0).sum())})
     # Python-side setup of a sweep: validating 1000 Params and packing constants
     tic = time.perf_counter()
-    il.sweeps._param_rows(PAPER, {"omega": OMEGAS}, "exact", None, None)
+    il.sweeps.diagrams._param_rows(PAPER, {"omega": OMEGAS}, "exact", None, None)
     setup = time.perf_counter() - tic
     # balance of run_jobs' dynamic hand-out on 2 threads, replayed with these costs:
     # blocks in its order and sizes, each to the thread that is free first
     nw = 2
-    jorder = il.sweeps.interleaved(OMEGAS.size)
-    max_block = max(1, il.sweeps.BLOCK_OUTPUT // il.sweeps.CAP_PER_VALUE)
+    jorder = il.sweeps.diagrams.interleaved(OMEGAS.size)
+    max_block = max(1, il.sweeps.diagrams.BLOCK_OUTPUT // il.sweeps.diagrams.CAP_PER_VALUE)
     free = [0.0] * nw
     a_ = 0
     n_blocks = 0

@@ -149,7 +149,7 @@ def main(argv=None):
     a = ap.parse_args(argv)
     reps = 3 if a.quick else 7
     print(f"impactlib stability benchmark; {os.cpu_count()} cores; workers "
-          f"{il.sweeps.worker_count()}; repeats {reps} (medians after warm-up)")
+          f"{il.parallel.worker_count()}; repeats {reps} (medians after warm-up)")
     out = {"orbit": bench_orbit(reps), "strip": bench_strip(max(3, reps // 2)),
            "continuation": bench_continuation(reps)}
     o = out["orbit"]

@@ -52,7 +52,7 @@ def main(argv=None) -> int:
                   f"(missing: {', '.join(missing)}): pip install 'impact-explorer[report]'",
                   file=sys.stderr)
             return 2
-        from .report import main as report_main
+        from .verify.report import main as report_main
         return report_main(quick=args.quick, out=args.out)
     return 2  # pragma: no cover  (argparse rejects other commands)
 

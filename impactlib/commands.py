@@ -14,6 +14,8 @@ import sys
 
 import numpy as np
 
+import impactlib as il
+
 from .model import FIELDS, PARAM_NAMES, Params
 
 
@@ -137,9 +139,6 @@ def _method_kw(args):
 
 def compute(args):
     """The result object of a parsed run command (the same call a script would make)."""
-    from . import streaming
-    import impactlib as il
-
     p = _params(args)
     progress = getattr(args, "progress", False)
     if args.command == "simulate":
@@ -148,22 +147,22 @@ def compute(args):
     if args.command == "bifurcation":
         values = np.linspace(args.start, args.stop, args.num)
         warm = False if args.warm_start == "no" else args.warm_start
-        return streaming.bifurcation(p, args.name, values, t_end=args.t_end,
-                                     t_record=args.t_record, x0=args.x0, v0=args.v0,
-                                     warm_start=warm, lyapunov=args.lyapunov,
-                                     progress=progress, **_method_kw(args))
+        return il.bifurcation(p, args.name, values, t_end=args.t_end,
+                              t_record=args.t_record, x0=args.x0, v0=args.v0,
+                              warm_start=warm, lyapunov=args.lyapunov,
+                              progress=progress, **_method_kw(args))
     if args.command == "regime-map":
         vx = np.linspace(args.x_start, args.x_stop, args.nx)
         vy = np.linspace(args.y_start, args.y_stop, args.ny)
-        return streaming.regime_map(p, args.name_x, vx, args.name_y, vy, t_end=args.t_end,
-                                    t_record=args.t_record, x0=args.x0, v0=args.v0,
-                                    progress=progress, **_method_kw(args))
+        return il.regime_map(p, args.name_x, vx, args.name_y, vy, t_end=args.t_end,
+                             t_record=args.t_record, x0=args.x0, v0=args.v0,
+                             progress=progress, **_method_kw(args))
     if args.command == "orbit":
         return il.periodic_orbit(p, n=args.n, x0=args.x0, v0=args.v0, phase=args.phase)
     if args.command == "basins":
-        return streaming.basins(p, tuple(args.x_range), tuple(args.v_range), n=tuple(args.n),
-                                phase=args.phase, max_periods=args.max_periods,
-                                time_limit=args.time_limit, progress=progress)
+        return il.basins(p, tuple(args.x_range), tuple(args.v_range), n=tuple(args.n),
+                         phase=args.phase, max_periods=args.max_periods,
+                         time_limit=args.time_limit, progress=progress)
     raise ValueError(f"unknown command {args.command!r}")  # pragma: no cover
 
 

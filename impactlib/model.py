@@ -8,6 +8,7 @@ Validation lives here and in :func:`check_run`, and runs once, in Python, before
 from __future__ import annotations
 
 import dataclasses
+import enum
 import math
 from dataclasses import dataclass
 
@@ -15,6 +16,34 @@ import numpy as np
 
 PARAM_NAMES = ("m", "c", "k", "g", "r", "omega")
 METHODS = ("exact", "rk4", "rk45")
+
+
+class RunStatus(enum.IntEnum):
+    """How a run ended (Solution.status and every kernel's status code)."""
+
+    OK = 0              # reached t_end
+    IMPACT_LIMIT = 1    # stopped at max_impacts
+    STEP_LIMIT = 2      # stopped at max_steps
+    OUTPUT_FULL = 3     # more impacts in the window than the output holds
+
+
+class MotionCode(enum.IntEnum):
+    """Codes in the (m, n) arrays of a classification (classify's kernel, RegimeMap)
+    where a count of impacts or periods does not apply; counts are >= 0."""
+
+    INFINITE = -1       # m: complete chattering (a chatter summed); n: no period found
+    UNDETERMINED = -2   # the record window is shorter than 4 periods
+    NOT_SETTLED = -3    # m: a transient still approaching a period-n orbit
+    UNBOUNDED = -4      # m: the impact speed grows every cycle (no dissipation)
+
+
+RUN_MESSAGES = {
+    RunStatus.OK: "reached t_end",
+    RunStatus.IMPACT_LIMIT: "stopped at the impact limit (max_impacts); results up to that time",
+    RunStatus.STEP_LIMIT: "stopped at the step limit (max_steps); results up to that time",
+    RunStatus.OUTPUT_FULL: "more impacts in the record window than the output holds; the rest "
+                           "were not kept",
+}
 #: Magnitudes the closed form can represent: beyond them its constants (c/m, k/m, m*m,
 #: (2 c omega)^2, the period 2 pi/omega) overflow or underflow double precision.
 MAGNITUDE_MAX = 1e50

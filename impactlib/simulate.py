@@ -8,189 +8,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._jit import jit
-from .events import (FLY, HMAX_PERIODS, IMPACT, NGRID, NO_IMPACT, STEP_LIMIT, STICK,
-                     impact_outcome, next_impact, next_impact_grid, search_grid, step_cap)
-from .flight import (G, R, T0, fastest_rate, flight_state, release_time, start_segment,
-                     system_constants)
-from .integrators import advance_rk4, advance_rk45
-from .model import Params, RunLimits, check_run
-from impactlib.io.result import Result
-
-METHOD_IDS = {"exact": 0, "rk4": 1, "rk45": 2}
-HOP_MEMORY = 8           # hops remembered for predicting the next one
-HOP_MATCH_RTOL = 1e-3    # ... if it left the wall this close in speed
-TAIL_TOL = 1e-6          # a chatter is summed once one hop lasts under this many time scales
-
-# run status codes (Solution.status)
-OK, IMPACT_LIMIT, STEP_LIMIT_HIT, OUTPUT_FULL = 0, 1, 2, 3
-MESSAGES = {
-    OK: "reached t_end",
-    IMPACT_LIMIT: "stopped at the impact limit (max_impacts); results up to that time",
-    STEP_LIMIT_HIT: "stopped at the step limit (max_steps); results up to that time",
-    OUTPUT_FULL: "more impacts in the record window than the output holds; the rest were not kept",
-}
-
-
-@jit
-def _sample_segment(sp, seg, t_hi, ts, xs, vs, i):
-    while i < ts.shape[0] and ts[i] <= t_hi:
-        x, v, a, j, rh, sc = flight_state(sp, seg, ts[i] - seg[T0])
-        xs[i] = x
-        vs[i] = v
-        i += 1
-    return i
-
-
-@jit
-def _sample_rest(g, t_hi, ts, xs, vs, i):
-    while i < ts.shape[0] and ts[i] <= t_hi:
-        xs[i] = g
-        vs[i] = 0.0
-        i += 1
-    return i
-
-
-@jit
-def run_kernel(sp, method, t, x, v, t_end, t_record, hmax, rate, dt, rtol, atol,
-               imp_t, imp_v, stick, pc_t, pc_x, pc_v, d_t, d_x, d_v, max_impacts, max_steps):
-    """Drive one run from state (t, x, v) to t_end.
-
-    Output arrays are filled in place: impacts inside [t_record, t_end] (as many as
-    imp_t holds; more are counted, not kept), sticking intervals clipped to the window,
-    and the state at the prescribed sample times pc_t and d_t (sorted, inside the window).
-
-    Returns (status, n_recorded, n_impacts_total, n_stick, n_tail, t, x, v, stuck, nsteps),
-    n_tail counting the chatter sequences summed to their accumulation point in the window.
-    """
-    g = sp[G]
-    r = sp[R]
-    cap = imp_t.shape[0]
-    n_rec = 0
-    n_tot = 0
-    n_stick = 0
-    n_tail = 0
-    nsteps = 0
-    ip = 0
-    idn = 0
-    status = OK
-    stuck = False
-    h45 = min(0.01 / rate, hmax)
-    grid = search_grid(sp, rate) if method == 0 else np.zeros(NGRID)
-    # the last hops (rebound speed, length): a hop that left the wall as fast as this one
-    # predicts its length (periodic orbits repeat them)
-    hop_v = np.full(HOP_MEMORY, -1.0)
-    hop_s = np.zeros(HOP_MEMORY)
-    n_hop = 0
-    # the initial state may be on the wall
-    if x <= g:
-        x = g
-        if v < 0.0:
-            if t >= t_record:
-                if n_rec < cap:
-                    imp_t[n_rec] = t
-                    imp_v[n_rec] = v
-                n_rec += 1
-            n_tot += 1
-            v = -r * v
-        if v <= 0.0:
-            v = 0.0
-        mode, tn = impact_outcome(sp, t, v, rate, TAIL_TOL)
-        if mode == STICK:
-            ip = _sample_rest(g, tn, pc_t, pc_x, pc_v, ip)
-            idn = _sample_rest(g, tn, d_t, d_x, d_v, idn)
-            t = tn
-            v = 0.0
-            stuck = True
-    while t < t_end:
-        if stuck:
-            tr = release_time(sp, t)
-            te = min(tr, t_end)
-            ip = _sample_rest(g, te, pc_t, pc_x, pc_v, ip)
-            idn = _sample_rest(g, te, d_t, d_x, d_v, idn)
-            if te > t_record and n_stick < stick.shape[0]:
-                stick[n_stick, 0] = max(t, t_record)
-                stick[n_stick, 1] = te
-                n_stick += 1
-            if tr >= t_end:
-                t = t_end
-                break
-            t = tr
-            x = g
-            v = 0.0
-            stuck = False
-            continue
-        started_at_rest = False
-        if method == 0:
-            seg = start_segment(sp, t, x, v)
-            guess = -1.0
-            best = HOP_MATCH_RTOL * v
-            for jh in range(HOP_MEMORY):
-                if abs(hop_v[jh] - v) < best:
-                    best = abs(hop_v[jh] - v)
-                    guess = hop_s[jh]
-            kind, s, vh, ns = next_impact_grid(sp, seg, t_end - t, hmax, max_steps - nsteps,
-                                               grid, guess)
-            if kind == IMPACT and v > 0.0:
-                hop_v[n_hop % HOP_MEMORY] = v
-                hop_s[n_hop % HOP_MEMORY] = s
-                n_hop += 1
-            th = t + s
-            ip = _sample_segment(sp, seg, th, pc_t, pc_x, pc_v, ip)
-            idn = _sample_segment(sp, seg, th, d_t, d_x, d_v, idn)
-            started_at_rest = s == 0.0 and x <= g and v == 0.0
-            xh, vend = g, vh
-            if kind != IMPACT:
-                xh, vend, ae, je, rhe, sce = flight_state(sp, seg, s)
-        elif method == 1:
-            kind, th, xh, vh, ns, ip, idn = advance_rk4(
-                sp, t, x, v, t_end, dt, pc_t, pc_x, pc_v, ip, d_t, d_x, d_v, idn, max_steps - nsteps)
-            vend = vh
-        else:
-            kind, th, xh, vh, h45, ns, ip, idn = advance_rk45(
-                sp, t, x, v, h45, t_end, rtol, atol, pc_t, pc_x, pc_v, ip, d_t, d_x, d_v, idn,
-                max_steps - nsteps)
-            vend = vh
-        nsteps += ns
-        if kind != IMPACT:
-            # reached t_end, or stopped at the step limit: (th, xh, vend) is where
-            t, x, v = th, xh, vend
-            if kind == STEP_LIMIT:
-                status = STEP_LIMIT_HIT
-            break
-        # impact at th with velocity vh <= 0
-        t = th
-        x = g
-        if not (started_at_rest and vh == 0.0):
-            n_tot += 1
-            if t >= t_record:
-                if n_rec < cap:
-                    imp_t[n_rec] = t
-                    imp_v[n_rec] = vh
-                n_rec += 1
-        vplus = -r * vh
-        if vplus <= 0.0:
-            vplus = 0.0
-        mode, tn = impact_outcome(sp, t, vplus, rate, TAIL_TOL)
-        if mode == STICK:
-            if tn > t and t >= t_record:
-                n_tail += 1
-            ip = _sample_rest(g, tn, pc_t, pc_x, pc_v, ip)
-            idn = _sample_rest(g, tn, d_t, d_x, d_v, idn)
-            t = tn
-            v = 0.0
-            stuck = True
-        else:
-            v = vplus
-        if n_tot >= max_impacts:
-            status = IMPACT_LIMIT
-            break
-        if nsteps >= max_steps:
-            status = STEP_LIMIT_HIT
-            break
-    if status == OK and n_rec > cap:
-        status = OUTPUT_FULL
-    return status, n_rec, n_tot, n_stick, n_tail, t, x, v, stuck, nsteps
+from .kernels import engine as E
+from .kernels._jit import jit
+from .kernels.engine import METHOD_IDS
+from .kernels.events import step_cap
+from .kernels.flight import fastest_rate, system_constants
+from .model import RUN_MESSAGES, Params, RunLimits, RunStatus, check_run
+from .io.result import Result
 
 
 # ---------------------------------------------------------------- Python layer
@@ -285,7 +109,7 @@ class Solution(Result):
 
     @property
     def success(self) -> bool:
-        return self.status == OK
+        return self.status == RunStatus.OK
 
 
 @jit
@@ -311,10 +135,12 @@ def _run_constants(m, c, k, g, r, omega):
 
 
 @jit
-def _run_setup(m, c, k, g, r, omega, t_lo, t_hi, phase):
-    # one kernel call for the constants and the section times of a run
+def _run_setup(m, c, k, g, r, omega, t_lo, t_hi, phase, method, dt, rtol, atol, max_steps):
+    # one kernel call for the constants, the run controls and the section times of a run
     sp, rate, hmax = _run_constants(m, c, k, g, r, omega)
-    return sp, rate, hmax, section_times(t_lo, t_hi, phase, 2.0 * math.pi / omega)
+    ctl = E.controls(t_hi, t_lo, hmax, rate, dt, rtol, atol, 0.0, max_steps, method,
+                     E.NO_TANGENT)
+    return sp, ctl, section_times(t_lo, t_hi, phase, 2.0 * math.pi / omega)
 
 
 def run_constants(p: Params):
@@ -323,6 +149,7 @@ def run_constants(p: Params):
 
 
 _NO_SAMPLES = np.empty(0)
+_NO_LOGS = np.empty((0, 2))
 
 
 def _built(cls, **fields):
@@ -377,7 +204,10 @@ def simulate(p: Params, t_end: float = 500.0, x0: float | None = None, v0: float
         rtol=rtol, atol=atol, dense=dense, limits=limits)
     max_impacts = limits.max_impacts if max_impacts is None else int(max_impacts)
     max_steps = limits.max_steps if max_steps is None else int(max_steps)
-    sp, rate, hmax, pc_t = _run_setup(p.m, p.c, p.k, p.g, p.r, p.omega, t_record, t_end, phase)
+    sp, ctl, pc_t = _run_setup(p.m, p.c, p.k, p.g, p.r, p.omega, t_record, t_end, phase,
+                               METHOD_IDS[method], 0.0 if dt is None else dt, rtol, atol,
+                               max_steps)
+    res = np.empty(E.NRES)
     period = 2.0 * math.pi / p.omega
     d_t = np.linspace(t_record, t_end, dense) if dense else _NO_SAMPLES
     n_pc, n_d = pc_t.shape[0], d_t.shape[0]
@@ -393,18 +223,21 @@ def simulate(p: Params, t_end: float = 500.0, x0: float | None = None, v0: float
         samples[:] = np.nan
         pc_x, pc_v = samples[:n_pc], samples[n_pc:2 * n_pc]
         d_x, d_v = samples[2 * n_pc:2 * n_pc + n_d], samples[2 * n_pc + n_d:]
+        ctl[E.MAX_IMPACTS] = max_impacts
         tic = time.perf_counter()
-        status, n_rec, n_tot, n_stick, n_tail, tf, xf, vf, stuck, nsteps = run_kernel(
-            sp, METHOD_IDS[method], float(t0), x0, v0, t_end, t_record, hmax, rate,
-            0.0 if dt is None else dt, rtol, atol, imp_t, imp_v, stick, pc_t, pc_x, pc_v,
-            d_t, d_x, d_v, max_impacts, max_steps)
+        E.run_from_python(sp, ctl, float(t0), x0, v0, imp_t, imp_v, stick, pc_t, pc_x, pc_v,
+                          d_t, d_x, d_v, _NO_SAMPLES, _NO_LOGS, res)
         elapsed = time.perf_counter() - tic
+        n_rec = int(res[E.N_REC])
         # more impacts in the window than the arrays held: run again with room for all of
         # them, also when a work limit ended the run (its partial results must be complete)
         if n_rec > cap and cap < max_impacts:
             cap = min(max_impacts, max(2 * cap, n_rec))
             continue
         break
+    status = RunStatus(int(res[E.STATUS]))
+    n_stick = int(res[E.N_STICK])
+    tf, xf, vf, stuck = res[E.T_F], res[E.X_F], res[E.V_F], res[E.STUCK] != 0.0
     # the outputs are views of the one buffer (its size is bounded by the window)
     n_keep = min(n_rec, cap)
     it = imp_t[:n_keep]
@@ -417,11 +250,13 @@ def simulate(p: Params, t_end: float = 500.0, x0: float | None = None, v0: float
     if dense:
         k = n_d - int(np.count_nonzero(np.isnan(d_x)))
         dense_out = _built(Samples, t=d_t[:k], x=d_x[:k], v=d_v[:k])
-    message = MESSAGES[status]
-    if status == IMPACT_LIMIT or status == STEP_LIMIT_HIT:
+    message = RUN_MESSAGES[status]
+    if status == RunStatus.IMPACT_LIMIT or status == RunStatus.STEP_LIMIT:
         message += f" (stopped at t = {tf:.6g})"
     return _built(Solution, params=p, method=method, t_end=t_end, t_record=t_record, phase=phase,
                   impacts=impacts, poincare=poincare, sticking=stick[:n_stick],
                   dense=dense_out, status=status, message=message,
-                  final=(tf, xf, vf, bool(stuck)), n_impacts=n_tot, n_chatter=n_tail,
-                  nsteps=nsteps, elapsed=elapsed, options=_options(method, x0, v0, t0, dt, rtol, atol))
+                  final=(float(tf), float(xf), float(vf), bool(stuck)),
+                  n_impacts=int(res[E.N_TOT]), n_chatter=int(res[E.N_TAIL]),
+                  nsteps=int(res[E.NSTEPS]), elapsed=elapsed,
+                  options=_options(method, x0, v0, t0, dt, rtol, atol))

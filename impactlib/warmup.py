@@ -1,16 +1,16 @@
 """Compile (or load from the Numba cache) every kernel a served page uses."""
 from __future__ import annotations
 
+from .analysis.basins import basins
+from .analysis.classify import classify
+from .analysis.lyapunov import lyapunov
+from .analysis.orbits import periodic_orbit
+from .model import Params
+from .simulate import simulate
+from .sweeps.diagrams import bifurcation, regime_map
+
 
 def warmup() -> None:
-    from .basins import basins
-    from .classify import classify
-    from .lyapunov import lyapunov
-    from .orbits import periodic_orbit
-    from .model import Params
-    from .simulate import simulate
-    from .sweeps import bifurcation, regime_map
-
     p = Params()
     sol = simulate(p, t_end=20.0, t_record=10.0, dense=16)
     classify(sol)

@@ -286,7 +286,7 @@ def test_readout_of_a_sticking_motion_never_speaks_of_an_error_it_has_not():
 def test_readout_verdict_for_every_status(kind, label, lam, unbounded, message, expect):
     from types import SimpleNamespace
 
-    from impactlib.classify import Motion
+    from impactlib.analysis.classify import Motion
     motion = Motion(math.nan, math.nan, kind, label,
                     lam if kind == "chaotic" else math.nan, 0.01)
     ly = SimpleNamespace(sticks=False, unbounded=unbounded, exponents=np.array([lam, lam]),
@@ -315,3 +315,29 @@ def test_strip_marks_chaos_only_where_classify_calls_it(make_explorer):
     title = e.lyapunov.figure.title.text
     assert f"{len(chaotic)} of {run.bif_n} values chaotic" in title, title
     assert f"{sum(k == 'unbounded' for k in kinds.values())} unbounded" in title
+
+
+@pytest.mark.parametrize("omega", [2.4321, 2.8123])
+def test_one_omega_move_is_one_simulation_and_at_most_one_lyapunov_run(make_explorer,
+                                                                        monkeypatch, omega):
+    """The scene, its Poincaré section and the stability readout share the scene's run;
+    the readout's exponents are classify's own measurement (2.8123: not periodic). The
+    displacement view's zoom window (the last periods, sampled densely) is a run of its
+    own, recognisable by its record window."""
+    from impactlib.analysis import lyapunov
+    e = make_explorer()
+    for job in (e.scene_job, e.stability_job):
+        assert job.done.wait(60)
+    runs, lyap = [], []
+    real_sim, real_ly = il.simulate, lyapunov.lyapunov_run
+    monkeypatch.setattr(il, "simulate", lambda *a, **k: runs.append(k) or real_sim(*a, **k))
+    monkeypatch.setattr(lyapunov, "lyapunov_run", lambda *a, **k: lyap.append(a) or real_ly(*a, **k))
+    e.settings.omega = omega
+    for job in (e.scene_job, e.stability_job):
+        assert job.done.wait(60)
+    assert e.readout is not None and e.readout.kind != "failed"
+    scene_runs = [k for k in runs if k["t_record"] == e.run.t_record]
+    window_runs = [k for k in runs if k["t_record"] > e.run.t_record]
+    assert len(scene_runs) == 1 and len(window_runs) <= 1, runs
+    assert len(runs) == len(scene_runs) + len(window_runs)
+    assert len(lyap) == (1 if e.readout.kind == "exponents" else 0)

@@ -1,14 +1,14 @@
 """Shared helpers of the core tests (imported as a plain module: pytest puts this folder on sys.path).
 
 References are expensive (mpmath); they are cached for the whole session by the
-``functools.lru_cache`` wrappers in :mod:`impactlib.report` and :func:`mp_cached` below.
+``functools.lru_cache`` wrappers in :mod:`impactlib.verify.report` and :func:`mp_cached` below.
 """
 from __future__ import annotations
 
 from functools import lru_cache
 
 import impactlib as il
-from impactlib.reference import mp_impacts
+from impactlib.verify.reference import mp_impacts
 
 PAPER = il.Params(m=1.0, c=0.05, k=1.0, g=0.0, r=0.8, omega=2.0)
 EPS = 2.220446049250313e-16

@@ -5,8 +5,8 @@ import sys
 import numpy as np
 
 from impactlib import cli
-from impactlib.compare import match_impacts
-from impactlib.report import CASES
+from impactlib.verify.compare import match_impacts
+from impactlib.verify.report import CASES
 
 
 def test_match_counts_missed_extra_and_tail():
@@ -29,7 +29,7 @@ def test_cases_cover_the_issue():
 
 def test_accuracy_command_quick(tmp_path):
     lines = []
-    from impactlib import report
+    from impactlib.verify import report
     assert report.main(quick=True, out=tmp_path, echo=lines.append) == 0
     text = "\n".join(lines)
     assert "exact" in text and "rk4 dt=0.01" in text and "rk45 rtol=1e-06" in text
@@ -52,7 +52,7 @@ def test_accuracy_command_names_the_missing_extra():
     """Without mpmath (the report's reference) the command says which extra to install,
     and the core and the metrics the app uses still import."""
     code = ("import sys; sys.modules['mpmath'] = None; "
-            "import impactlib, impactlib.compare; from impactlib.cli import main; "
+            "import impactlib, impactlib.verify.compare; from impactlib.cli import main; "
             "sys.exit(main(['accuracy', '--quick', '--out', 'unused']))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          timeout=120)

@@ -30,8 +30,8 @@ import numpy as np
 import pytest
 
 import impactlib as il
-from impactlib.report import CASE_BY_NAME, CASES, compare, reference, steady_orbit
-from impactlib.reference import mp_impacts
+from impactlib.verify.report import CASE_BY_NAME, CASES, compare, reference, steady_orbit
+from impactlib.verify.reference import mp_impacts
 
 from core_helpers import EPS, PAPER, mp_cached
 

@@ -4,7 +4,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import impactlib as il
-from impactlib.report import steady_orbit
+from impactlib.verify.report import steady_orbit
 
 from core_helpers import EPS
 

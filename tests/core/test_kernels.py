@@ -9,9 +9,9 @@ import pytest
 from numba import njit
 
 import impactlib as il
-from impactlib import events as E
-from impactlib import flight as F
-from impactlib.reference import mp_state
+from impactlib.kernels import events as E
+from impactlib.kernels import flight as F
+from impactlib.verify.reference import mp_state
 
 from core_helpers import EPS, PAPER
 
@@ -43,7 +43,7 @@ def test_flight_state_matches_mpmath_in_every_regime(name):
     p = REGIMES[name]
     sp = constants(p)
     rate = p.rate()
-    rng = np.random.default_rng(abs(hash(name)) % 2**32)
+    rng = np.random.default_rng(list(REGIMES).index(name))
     for _ in range(12):
         t0 = float(rng.uniform(0.0, 50.0))
         x0 = float(rng.uniform(-1.0, 1.0))
@@ -146,7 +146,7 @@ def test_searches_do_not_invent_an_impact_at_a_near_miss(delta):
 def test_short_hops_match_the_certified_walk_and_mpmath():
     """Chatter hops at omega = 0.2 taken by the Taylor short hop agree with the certified
     walk and with the mpmath reference's first impact from the same start."""
-    from impactlib.reference import mp_impacts
+    from impactlib.verify.reference import mp_impacts
 
     p = PAPER.replace(omega=0.2)
     sp = constants(p)

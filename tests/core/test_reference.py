@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 import impactlib as il
-from impactlib.compare import match_impacts
-from impactlib.report import CASE_BY_NAME, ivp_reference, reference, steady_orbit
-from impactlib.reference import ReferenceNotApplicable, ivp_impacts, mp_release_time, mp_state
+from impactlib.verify.compare import match_impacts
+from impactlib.verify.report import CASE_BY_NAME, ivp_reference, reference, steady_orbit
+from impactlib.verify.reference import ReferenceNotApplicable, ivp_impacts, mp_release_time, mp_state
 
 from core_helpers import EPS, PAPER, mp_cached
 

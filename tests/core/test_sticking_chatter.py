@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 import impactlib as il
-from impactlib.report import steady_orbit
-from impactlib.reference import mp_release_time
+from impactlib.verify.report import steady_orbit
+from impactlib.verify.reference import mp_release_time
 
 from core_helpers import EPS, PAPER, mp_cached
 

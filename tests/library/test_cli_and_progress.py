@@ -103,7 +103,7 @@ def test_iter_regime_map_pieces_make_the_map():
     vx, vy = np.linspace(1.0, 3.0, 5), np.linspace(0.3, 0.9, 5)
     parts = list(il.iter_regime_map(P, "omega", vx, "r", vy, t_end=100, t_record=50, rows=2))
     assert [p.values_y.size for p in parts] == [2, 2, 1]
-    from impactlib.streaming import merge_regime_maps
+    from impactlib.sweeps.diagrams import merge_regime_maps
     assert merge_regime_maps(parts) == il.regime_map(P, "omega", vx, "r", vy, t_end=100,
                                                      t_record=50)
 

@@ -188,7 +188,7 @@ def _methods(p):
 @given(**BOX)
 def test_no_nan_and_never_behind_the_wall_for_every_method(m, c, k, g, r, omega, v0):
     """Exact: x >= g to rounding. rk4/rk45 look for impacts only at step ends and are
-    documented to miss a dip below the wall inside one step (impactlib/integrators.py);
+    documented to miss a dip below the wall inside one step (impactlib/kernels/integrators.py);
     such a dip is at most a h^2/8 deep (a the largest acceleration, h the step), so that
     is their bound: anything deeper would be a real error."""
     p = _params(m, c, k, g, r, omega)

@@ -1,4 +1,4 @@
-"""impactlib.distributed on a LocalCluster: the same rows, in the same order, as the local
+"""impactlib.sweeps.distributed on a LocalCluster: the same rows, in the same order, as the local
 run.  One in-process cluster (two worker threads) serves the whole module."""
 import numpy as np
 import pytest
@@ -6,7 +6,7 @@ import pytest
 import impactlib as il
 
 distributed = pytest.importorskip("distributed")
-ild = pytest.importorskip("impactlib.distributed")
+ild = pytest.importorskip("impactlib.sweeps.distributed")
 
 # short runs keep the module quick; the window still holds many forcing periods
 RUN = dict(t_end=120.0, t_record=60.0)

@@ -37,9 +37,9 @@ from pathlib import Path
 import numpy as np
 
 from .compare import V_FLOOR, Comparison, impact_errors, match_impacts  # noqa: F401 (re-exported)
-from .model import Params, rk4_stability_limit
+from ..model import Params, rk4_stability_limit
 from .reference import ReferenceNotApplicable, ivp_impacts, mp_impacts, mp_state
-from .simulate import simulate
+from ..simulate import simulate
 
 PAPER = Params(m=1.0, c=0.05, k=1.0, g=0.0, r=0.8, omega=2.0)
 DENSE = 200
@@ -324,7 +324,7 @@ def markdown(rows, quick: bool, png_name: str) -> str:
         "",
         "Every method is compared with an independent reference: the closed form evaluated in",
         "mpmath at 40 digits, impacts bracketed on a dense grid with every turning point",
-        "checked and refined by safeguarded Newton (`impactlib/reference.py`). The row",
+        "checked and refined by safeguarded Newton (`impactlib/verify/reference.py`). The row",
         "`ref: solve_ivp` cross-checks that reference with scipy's DOP853 (rtol 1e-12) and a",
         "terminal event, where it applies (not through chatter, sticking or shallow dips).",
         "",

@@ -13,10 +13,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .model import PARAM_NAMES, Params, RunLimits
-from .simulate import run_constants, simulate
-from .tangent import tangent_run
-from impactlib.io.result import Result
+from ..kernels import engine as E
+from ..model import PARAM_NAMES, Params, RunLimits
+from ..simulate import run_constants, simulate
+from ..io.result import Result
 
 NEWTON_MAX = 40
 NEWTON_TOL = 1e-11          # residual, relative to the orbit's size (and 1)
@@ -126,23 +126,23 @@ class MapEval:
         self.t1 = phase + n * p.T
         self.imp_t = np.empty(IMPACT_CAP)
         self.imp_v = np.empty(IMPACT_CAP)
-        self.marks = np.empty(0)
-        self.logs = np.zeros((0, 2))
+        self.buffers = E.buffers(imp_t=self.imp_t, imp_v=self.imp_v)
         lim = RunLimits()
-        self.max_impacts, self.max_steps = lim.max_impacts, lim.max_steps
+        self.ctl = E.controls(self.t1, self.t0, self.hmax, self.rate, 0.0, 0.0, 0.0,
+                              lim.max_impacts, lim.max_steps, E.EXACT, E.JACOBIAN)
+        self.res = np.empty(E.NRES)
 
     def __call__(self, x, v):
         """(z1, J, info) with info = (status, n_impacts, stuck, vmin)."""
         x = max(x, self.p.g)
-        out = tangent_run(self.sp, self.t0, x, v, self.t1, self.t0, self.hmax, self.rate,
-                          self.marks, False, self.imp_t, self.imp_v, self.logs,
-                          self.max_impacts, self.max_steps)
-        (status, n_rec, n_tot, tf, xf, vf, stuck, nsteps, j11, j12, j21, j22, stuck_m,
-         n_m, vmin, n_tail) = out
+        res = self.res
+        status = E.run_engine(self.sp, self.ctl, self.t0, x, v, self.buffers, res)
         # a mass that sticks at some point of the cycle: the map is locally constant
-        sticks = bool(stuck) or bool(stuck_m)
-        J = np.array([[j11, j12], [j21, j22]])
-        return np.array([xf, vf]), J, (status, n_tot, sticks, vmin, n_rec, n_tail)
+        sticks = res[E.STUCK] != 0.0 or res[E.STUCK_MARKED] != 0.0
+        J = res[E.J11:E.J22 + 1].reshape(2, 2).copy()
+        return (res[E.X_F:E.V_F + 1].copy(), J,
+                (status, int(res[E.N_TOT]), sticks, res[E.VMIN], int(res[E.N_REC]),
+                 int(res[E.N_TAIL])))
 
     def impacts(self, n_rec):
         k = min(n_rec, IMPACT_CAP)

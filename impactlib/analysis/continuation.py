@@ -50,12 +50,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._jit import jit
-from .flight import G, K, M, OM, R, C_, flight_state, start_segment, system_constants
-from .model import Params
+from ..kernels._jit import jit
+from ..kernels.flight import G, K, M, OM, R, C_, flight_state, start_segment, system_constants
+from ..model import Params
 from .orbits import check_start, periodic_orbit
-from .tangent import flow_jacobian
-from impactlib.io.result import SweepResult
+from ..kernels.tangent import flow_jacobian
+from ..io.result import SweepResult
 
 NEWTON_TOL = 1e-11
 NEWTON_MAX = 8

@@ -30,12 +30,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._jit import jit
+from ..kernels._jit import jit
 from .classify import MAX_PERIOD, classify, describe
-from .flight import FA, OM
-from .model import Params, RunLimits
-from .simulate import run_constants, run_kernel, simulate
-from impactlib.io.result import SweepResult
+from ..kernels.flight import FA, OM
+from ..model import Params, RunLimits
+from ..kernels import engine as E
+from ..kernels.engine import Buffers
+from ..model import RunStatus
+from ..parallel import run_tasks
+from ..progress import reporter, stopped
+from ..simulate import run_constants, simulate
+from ..io.result import SweepResult
 
 SETTLE_RTOL = 1e-6         # settling tolerance, relative to the grid's scale (see _scale)
 ROUND_RTOL = 1e-10         # error floor: rounding accumulated over an orbit's flights and
@@ -148,7 +153,7 @@ def _matching_box(box, boxes, rtol):
 
 
 @jit
-def settle_starts(sp, rate, hmax, phase, x0s, v0s, settle_tol, round_tol, set_factor, huge,
+def follow_starts(sp, rate, hmax, phase, x0s, v0s, settle_tol, round_tol, set_factor, huge,
                   max_periods, max_period, n_window, chaos_boxes, box_rtol, max_impacts,
                   max_steps, outcome, n_out, m_out, chat_out, pts_out, err_out, box_out,
                   fin_out, used_out):
@@ -173,7 +178,11 @@ def settle_starts(sp, rate, hmax, phase, x0s, v0s, settle_tol, round_tol, set_fa
     hm = np.zeros(size, dtype=np.int64)
     hc = np.zeros(size, dtype=np.int64)
     empty = np.empty(0)
-    stick = np.empty((0, 2))
+    buf = Buffers(empty, empty, np.empty((0, 2)), empty, empty, empty, empty, empty, empty,
+                  empty, np.empty((0, 2)))
+    ctl = E.controls(phase, phase, hmax, rate, 0.0, 1e-6, 1e-9, max_impacts, max_steps,
+                     E.EXACT, E.NO_TANGENT)
+    run = np.empty(E.NRES)
     for s in range(x0s.shape[0]):
         t = phase
         x = x0s[s]
@@ -191,14 +200,18 @@ def settle_starts(sp, rate, hmax, phase, x0s, v0s, settle_tol, round_tol, set_fa
         while k < max_periods:
             k += 1
             t_next = phase + k * period
-            st, n_rec, n_tot, n_stick, n_tail, tf, x, v, stuck, ns = run_kernel(
-                sp, 0, t, x, v, t_next, t, hmax, rate, 0.0, 1e-6, 1e-9, empty, empty, stick,
-                empty, empty, empty, empty, empty, empty,
-                max(1, max_impacts - n_imp), max(1, max_steps - n_steps))
+            ctl[E.T_END] = t_next
+            ctl[E.T_RECORD] = t
+            ctl[E.MAX_IMPACTS] = max(1, max_impacts - n_imp)
+            ctl[E.MAX_STEPS] = max(1, max_steps - n_steps)
+            st = E.run_engine(sp, ctl, t, x, v, buf, run)
+            x, v = run[E.X_F], run[E.V_F]
+            n_rec, n_tail = int(run[E.N_REC]), int(run[E.N_TAIL])
             t = t_next
-            n_imp += n_tot
-            n_steps += ns
-            if st == 1 or st == 2 or n_imp >= max_impacts or n_steps >= max_steps:
+            n_imp += int(run[E.N_TOT])
+            n_steps += int(run[E.NSTEPS])
+            if (st == RunStatus.IMPACT_LIMIT or st == RunStatus.STEP_LIMIT
+                    or n_imp >= max_impacts or n_steps >= max_steps):
                 res = WORK_LIMIT
                 break
             if not (abs(x) <= huge and abs(v) <= huge):
@@ -469,33 +482,6 @@ def _scale(p, xr, vr):
                1e-300)
 
 
-# ------------------------------------------------------------- pool adapter
-# The one place that knows how work reaches the sweeps' thread pool: run independent
-# tasks, at most ``ahead`` queued, results in submission order; closing the generator
-# cancels what has not started.
-
-
-def _run_tasks(fn, args_list, workers):
-    from .sweeps import _executor, worker_count
-
-    args_list = list(args_list)
-    if workers == 1:
-        for args in args_list:
-            yield fn(*args)
-        return
-    ex = _executor(workers)
-    ahead = 2 * (workers or worker_count())
-    pending = []
-    nxt = 0
-    try:
-        while nxt < len(args_list) or pending:
-            while nxt < len(args_list) and len(pending) < ahead:
-                pending.append(ex.submit(fn, *args_list[nxt]))
-                nxt += 1
-            yield pending.pop(0).result()
-    finally:
-        for f in pending:
-            f.cancel()
 
 
 # ------------------------------------------------------------------ drivers
@@ -640,7 +626,7 @@ def _block(reg, sp, rate, hmax, phase, xs, v_rows, settle_tol, round_tol, huge, 
     box = np.zeros((k, 4))
     fin = np.zeros((k, 3))
     used = np.zeros(k, dtype=np.int64)
-    settle_starts(sp, rate, hmax, phase, x0s, v0s, settle_tol, round_tol, SET_FACTOR, huge,
+    follow_starts(sp, rate, hmax, phase, x0s, v0s, settle_tol, round_tol, SET_FACTOR, huge,
                   max_periods, MAX_PERIOD, n_window, reg.chaos_boxes, BOX_RTOL, max_impacts,
                   max_steps, outcome, n_out, m_out, chat, pts, err, box, fin, used)
     return outcome, n_out, m_out, chat, pts, err, box, fin, used
@@ -694,7 +680,7 @@ def _iter(p, xr, vr, nx, nv, phase, max_periods, n_window, rows_per_block, worke
     args = [(reg, sp, rate, hmax, phase, xs, vs[a:b], *common) for a, b in zip(starts, stops)]
     done = 0
     stopped = False
-    gen = _run_tasks(_block, args, workers)
+    gen = run_tasks(_block, args, workers)
     try:
         for a, res in zip(starts, gen):
             outcome, n_out, m_out, chat, pts, err, box, fin, used = res
@@ -762,10 +748,9 @@ def basins(p: Params, x_range, v_range, n=(100, 100), phase: float = 0.0, *,
     Basins
     """
     if progress is not None or cancel is not None:
-        from .streaming import basins as chunked
-        return chunked(p, x_range, v_range, n, phase, max_periods=max_periods,
-                       n_window=n_window, workers=workers, time_limit=time_limit,
-                       limits=limits, progress=progress, cancel=cancel)
+        return _basins_in_blocks(p, x_range, v_range, n, phase, max_periods=max_periods,
+                                 n_window=n_window, workers=workers, time_limit=time_limit,
+                                 limits=limits, progress=progress, cancel=cancel)
     xr, vr, (nx, nv), phase = _check(p, x_range, v_range, n, phase, max_periods, n_window,
                                      time_limit)
     tic = time.perf_counter()
@@ -787,3 +772,40 @@ def basins(p: Params, x_range, v_range, n=(100, 100), phase: float = 0.0, *,
                   complete=bool(last is not None and last.rows_done == nv),
                   message=last.message if last else "complete",
                   elapsed=time.perf_counter() - tic)
+
+
+def _basins_in_blocks(p, x_range, v_range, n=(100, 100), phase: float = 0.0, *,
+                      progress=None, cancel=None, rows_per_block=None, **kwargs) -> Basins:
+    """:func:`impactlib.basins` from the blocks of :func:`impactlib.iter_basins`, with
+    ``progress`` (rows done) and ``cancel`` (rows not run stay -1, ``complete`` False)."""
+    tic = time.perf_counter()
+    gen = iter_basins(p, x_range, v_range, n=n, phase=phase,
+                              rows_per_block=rows_per_block, **kwargs)
+    nx, nv = (n, n) if np.ndim(n) == 0 else (int(n[0]), int(n[1]))
+    update, close = reporter(progress, nv, "rows")
+    labels = np.full((nv, nx), -1, dtype=np.int64)
+    periods = np.zeros((nv, nx), dtype=np.int64)
+    last, cancelled = None, False
+    try:
+        for blk in gen:
+            rws = slice(blk.start, blk.start + blk.labels.shape[0])
+            labels[rws], periods[rws] = blk.labels, blk.periods
+            last = blk
+            update(blk.rows_done)
+            if stopped(cancel) and blk.rows_done < nv:
+                cancelled = True
+                break
+    finally:
+        gen.close()
+        close()
+    atts = last.attractors if last else ()
+    counts = np.bincount(labels[labels >= 0], minlength=len(atts))[:len(atts)]
+    total = labels.size
+    done = last.rows_done if last else 0
+    message = (f"cancelled after {done} of {nv} rows" if cancelled
+               else last.message if last else "complete")
+    return Basins(params=p, phase=float(phase), x=np.linspace(*x_range, nx),
+                          v=np.linspace(*v_range, nv), labels=labels, attractors=atts,
+                          fractions=counts / total, undecided=float(np.sum(labels < 0)) / total,
+                          periods=periods, complete=bool(done == nv and not cancelled),
+                          message=message, elapsed=time.perf_counter() - tic)

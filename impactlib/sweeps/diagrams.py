@@ -10,65 +10,35 @@ end and several callers (app sessions) share the cores instead of oversubscribin
 from __future__ import annotations
 
 import math
-import os
-import threading
 import time
-from concurrent.futures import ThreadPoolExecutor
 import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
 
-from ._jit import jit
-from .classify import MAX_PERIOD, PERIOD_RTOL, Motion, classify, describe, motion_class
-from .events import step_caps
-from .flight import G, OM, system_constants_rows
-from .model import PARAM_NAMES, Params, RunLimits, check_run, fastest_rate, rk4_stability_limits
-from .simulate import METHOD_IDS, run_kernel, section_times, simulate
-from impactlib.io.result import SweepResult
+from ..kernels._jit import jit
+from ..analysis.classify import MAX_PERIOD, PERIOD_RTOL, Motion, classify, describe, motion_class
+from ..analysis.lyapunov import grows_without_bound
+from ..kernels.events import step_caps
+from ..kernels.flight import G, OM, system_constants_rows
+from ..model import (PARAM_NAMES, MotionCode, Params, RunLimits, RunStatus, check_run,
+                     fastest_rate, rk4_stability_limits)
+from ..kernels import engine as E
+from ..kernels.engine import METHOD_IDS, Buffers
+from ..parallel import executor as _executor
+from ..parallel import run_blocks, worker_count
+from ..progress import reporter, stopped
+from ..simulate import section_times, simulate
+from ..io.result import SweepResult
 
 CAP_PER_VALUE = 4096        # impacts kept per value; more are counted, flagged in status
-_POOL_LOCK = threading.Lock()
-_POOL: ThreadPoolExecutor | None = None
-
-
-def worker_count() -> int:
-    return max(1, int(os.environ.get("IMPACTLIB_WORKERS", os.cpu_count() or 1)))
-
-
-def _pool() -> ThreadPoolExecutor:
-    global _POOL
-    with _POOL_LOCK:
-        if _POOL is None:
-            _POOL = ThreadPoolExecutor(max_workers=worker_count(), thread_name_prefix="impactlib")
-        return _POOL
-
-
-class _Inline:
-    """Executor stand-in that runs each task at once, in the caller's thread."""
-
-    class _Done:
-        def __init__(self, value):
-            self._value = value
-
-        def result(self):
-            return self._value
-
-    def submit(self, fn, *args, **kwargs):
-        return self._Done(fn(*args, **kwargs))
-
-
-def _executor(workers):
-    """The pool for tasks that are whole jobs of their own (the Lyapunov strip's chunks,
-    basin blocks, a regime map's classify pass); inline for ``workers=1``."""
-    return _Inline() if workers == 1 else _pool()
 
 
 @jit
 def sweep_kernel(sps, method, x0s, v0, t_end, t_record, hmaxs, rates, dt, rtol, atol,
                  out_t, out_v, counts, status, finals, classes, classify, warm,
                  max_impacts, max_steps):
-    """Run each row of sps in turn from (x0s[i], v0) (see run_kernel); results into the
+    """Run each row of sps in turn from (x0s[i], v0) (see engine.run_engine); results into the
     out arrays.  :func:`rows_kernel` with one start velocity for all rows."""
     rows_kernel(sps, method, x0s, np.full(sps.shape[0], v0), t_end, t_record, hmaxs, rates,
                 dt, rtol, atol, out_t, out_v, counts, status, finals, classes, classify, warm,
@@ -79,7 +49,7 @@ def sweep_kernel(sps, method, x0s, v0, t_end, t_record, hmaxs, rates, dt, rtol, 
 def rows_kernel(sps, method, x0s, v0s, t_end, t_record, hmaxs, rates, dt, rtol, atol,
                 out_t, out_v, counts, status, finals, classes, classify, warm,
                 max_impacts, max_steps):
-    """Run each row of sps in turn from (x0s[i], v0s[i]) (see run_kernel); results into
+    """Run each row of sps in turn from (x0s[i], v0s[i]) (see engine.run_engine); results into
     the out arrays.
 
     classes[i] = (m, n) codes when classify; finals[i] = (t, x, v, stuck) at the end.
@@ -89,6 +59,7 @@ def rows_kernel(sps, method, x0s, v0s, t_end, t_record, hmaxs, rates, dt, rtol, 
     nvals = sps.shape[0]
     empty = np.empty(0)
     stick = np.empty((0, 2))
+    res = np.empty(E.NRES)
     x, v, t0 = x0s[0], v0s[0], 0.0
     for i in range(nvals):
         sp = sps[i]
@@ -109,16 +80,19 @@ def rows_kernel(sps, method, x0s, v0s, t_end, t_record, hmaxs, rates, dt, rtol, 
             pc_t = empty
         pc_x = np.full(pc_t.shape[0], np.nan)
         pc_v = np.full(pc_t.shape[0], np.nan)
-        st, n_rec, n_tot, n_stick, n_tail, tf, xf, vf, stuck, nsteps = run_kernel(
-            sp, method, t0, x, v, t0 + t_end, t0 + t_record, hmaxs[i], rates[i], dt, rtol, atol,
-            out_t[i], out_v[i], stick, pc_t, pc_x, pc_v, empty, empty, empty,
-            max_impacts, max_steps)
+        ctl = E.controls(t0 + t_end, t0 + t_record, hmaxs[i], rates[i], dt, rtol, atol,
+                         max_impacts, max_steps, method, E.NO_TANGENT)
+        buf = Buffers(out_t[i], out_v[i], stick, pc_t, pc_x, pc_v, empty, empty, empty, empty,
+                      stick)
+        st = E.run_engine(sp, ctl, t0, x, v, buf, res)
+        n_rec = int(res[E.N_REC])
+        n_tail = int(res[E.N_TAIL])
         counts[i] = n_rec
         status[i] = st
-        finals[i, 0] = tf
-        finals[i, 1] = xf
-        finals[i, 2] = vf
-        finals[i, 3] = 1.0 if stuck else 0.0
+        finals[i, 0] = res[E.T_F]
+        finals[i, 1] = res[E.X_F]
+        finals[i, 2] = res[E.V_F]
+        finals[i, 3] = res[E.STUCK]
         if classify:
             nk = min(n_rec, out_t.shape[1])
             m, n = motion_class(pc_x, pc_v, out_t[i, :nk], t0 + t_end, period, n_tail,
@@ -176,8 +150,9 @@ class Bifurcation(SweepResult):
 
 @dataclass(frozen=True, repr=False, eq=False)
 class RegimeMap(SweepResult):
-    """(m, n) class of each cell of a two-parameter grid; -1 stands for infinity, -2 for
-    undetermined (window too short), 0 impacts for no impact, m = -3 not settled.
+    """(m, n) class of each cell of a two-parameter grid: counts, 0 impacts for no
+    impact, or the codes of :class:`impactlib.model.MotionCode` (INFINITE -1,
+    UNDETERMINED -2, NOT_SETTLED -3, UNBOUNDED -4).
 
     ``values_x`` (nx,) and ``values_y`` (ny,) are the grid of ``name_x`` and ``name_y``;
     ``impacts`` (m), ``period`` (n) and ``status`` (as in :class:`Bifurcation`) are
@@ -187,8 +162,8 @@ class RegimeMap(SweepResult):
 
     Cells whose section points never repeat are judged by :func:`classify` on their own
     run (the Lyapunov criterion): ``motions[(iy, ix)]`` holds its verdict, and their codes
-    become (m, -1) chaotic, (-3, -1) not settled, (-2, -2) undetermined or (-4, -1)
-    unbounded.  :meth:`motion` and :meth:`label` read both.
+    become (m, INFINITE) chaotic, (NOT_SETTLED, INFINITE), (UNDETERMINED, UNDETERMINED)
+    or (UNBOUNDED, INFINITE).  :meth:`motion` and :meth:`label` read both.
     """
 
     name_x: str
@@ -213,14 +188,18 @@ class RegimeMap(SweepResult):
 
 
 # codes of classify's verdicts on aperiodic cells (RegimeMap)
-_VERDICT_CODES = {"not settled": (-3, -1), "undetermined": (-2, -2), "unbounded": (-4, -1)}
+_VERDICT_CODES = {
+    "not settled": (MotionCode.NOT_SETTLED, MotionCode.INFINITE),
+    "undetermined": (MotionCode.UNDETERMINED, MotionCode.UNDETERMINED),
+    "unbounded": (MotionCode.UNBOUNDED, MotionCode.INFINITE),
+}
 
 
 def judge_aperiodic(p, name_x, vx, name_y, vy, impacts, period, workers, **run_kw):
     """classify() of a single run (settings ``run_kw``) for each cell of a regime map
     whose points never repeated: whether it is chaotic is classify's call (one rule, the
     Lyapunov criterion).  Updates the codes in place; returns {(iy, ix): Motion}."""
-    cells = np.argwhere((period == -1) & (impacts != 0))
+    cells = np.argwhere((period == MotionCode.INFINITE) & (impacts != 0))
 
     def judge(iy, ix):
         sol = simulate(p.replace(**{name_x: float(vx[ix]), name_y: float(vy[iy])}), **run_kw)
@@ -232,7 +211,8 @@ def judge_aperiodic(p, name_x, vx, name_y, vy, impacts, period, workers, **run_k
     for (iy, ix), fut in zip(cells, futs):
         mo = fut.result()
         if mo.kind != "chaotic":
-            impacts[iy, ix], period[iy, ix] = _VERDICT_CODES.get(mo.kind, (-2, -2))
+            impacts[iy, ix], period[iy, ix] = _VERDICT_CODES.get(
+                mo.kind, _VERDICT_CODES["undetermined"])
         motions[(int(iy), int(ix))] = mo
     return motions
 
@@ -348,37 +328,16 @@ def run_jobs(sps, hmaxs, rates, x0s, v0s, *, method, t_end, t_record, dt, rtol, 
     """
     n = sps.shape[0]
     order = interleaved(n) if order is None else np.asarray(order)
-    workers = worker_count() if workers is None else max(1, int(workers))
-    max_block = max(1, BLOCK_OUTPUT // max(1, cap))
-    lock = threading.Lock()
-    state = {"next": 0, "done": 0}
 
-    def take():
-        with lock:
-            a = state["next"]
-            if a >= n or (cancel is not None and cancel.is_set()):
-                return None
-            b = min(n, a + max(1, min(max_block, (n - a) // (4 * workers))))
-            state["next"] = b
-            return order[a:b]
+    def run_block(idx):
+        res = _run_rows(sps[idx], hmaxs[idx], rates[idx], method=method, x0s=x0s[idx],
+                        v0=v0s[idx], t_end=t_end, t_record=t_record, dt=dt, rtol=rtol,
+                        atol=atol, classify=classify, warm=False, cap=cap,
+                        max_impacts=max_impacts, max_steps=max_steps)
+        on_block(idx, *res)
 
-    def drain():
-        ran = 0
-        while True:
-            idx = take()
-            if idx is None:
-                return ran
-            res = _run_rows(sps[idx], hmaxs[idx], rates[idx], method=method, x0s=x0s[idx],
-                            v0=v0s[idx], t_end=t_end, t_record=t_record, dt=dt, rtol=rtol,
-                            atol=atol, classify=classify, warm=False, cap=cap,
-                            max_impacts=max_impacts, max_steps=max_steps)
-            on_block(idx, *res)
-            ran += idx.size
-
-    if workers == 1 or n <= 1:
-        return drain()
-    futs = [_pool().submit(drain) for _ in range(min(workers, n))]
-    return sum(f.result() for f in futs)
+    return run_blocks(n, run_block, order=order, max_block=max(1, BLOCK_OUTPUT // max(1, cap)),
+                      workers=workers, cancel=cancel)
 
 
 def _rows(values, order, T_of, out_t, out_v, counts, direction):
@@ -427,7 +386,7 @@ def bifurcation(p: Params, name: str, values, t_end: float = 500.0, t_record: fl
         A tqdm bar (True) or ``progress(done, total)`` after each chunk of values.
     cancel : threading.Event, optional
         Once set, no further chunk starts; the result holds the values done.
-        (With either, the sweep runs in chunks: :func:`impactlib.streaming.bifurcation`.)
+        (With either, the sweep runs in chunks: :func:`_bifurcation_in_chunks`.)
 
     Returns
     -------
@@ -436,13 +395,11 @@ def bifurcation(p: Params, name: str, values, t_end: float = 500.0, t_record: fl
         ``n_impacts`` aligned with ``values`` (worst status and total over directions).
     """
     if progress is not None or cancel is not None:
-        from .streaming import bifurcation as chunked
-        return chunked(p, name, values, t_end, t_record, method, x0=x0, v0=v0,
+        return _bifurcation_in_chunks(p, name, values, t_end, t_record, method, x0=x0, v0=v0,
                        warm_start=warm_start, dt=dt, rtol=rtol, atol=atol, workers=workers,
                        cap_per_value=cap_per_value, max_impacts=max_impacts,
                        max_steps=max_steps, lyapunov=lyapunov, progress=progress, cancel=cancel)
     if lyapunov:
-        from .lyapunov import bifurcation_with_lyapunov
         return bifurcation_with_lyapunov(p, name, values, t_end, t_record, method, x0, v0,
                                          warm_start, dt, rtol, atol, workers, cap_per_value,
                                          max_impacts, max_steps)
@@ -472,7 +429,7 @@ def bifurcation(p: Params, name: str, values, t_end: float = 500.0, t_record: fl
             order = srt if d > 0 else srt[::-1]
             run = (lambda order=order: _run_rows(sps[order], hmaxs[order], rates[order],
                                                  x0s=x0s[order], v0=v0, warm=True, **common))
-            jobs.append((d, order, _pool().submit(run) if workers != 1 else _Done(run())))
+            jobs.append((d, order, _executor(workers).submit(run)))
         for d, order, fut in jobs:
             out_t, out_v, counts, st, _, _ = fut.result()
             parts.append((order, st, counts, _rows(values, order, T_of, out_t, out_v, counts, d)))
@@ -497,16 +454,6 @@ def sweep_options(**kw) -> dict:
         kw.pop("rtol", None)
         kw.pop("atol", None)
     return kw
-
-
-class _Done:
-    """A finished job with the interface of a Future."""
-
-    def __init__(self, value):
-        self._value = value
-
-    def result(self):
-        return self._value
 
 
 def merge_parts(name, values, parts, elapsed) -> Bifurcation:
@@ -553,10 +500,9 @@ def regime_map(p: Params, name_x: str, values_x, name_y: str, values_y,
     blocks; ``rows_per_task`` is accepted for compatibility and not used).  Memory: one
     block's impacts at a time per worker.  ``progress`` (True for a tqdm bar, or
     ``progress(rows_done, rows)``) and ``cancel`` (a threading.Event) run it in blocks of
-    rows: :func:`impactlib.streaming.regime_map`."""
+    rows: :func:`_regime_map_in_blocks`."""
     if progress is not None or cancel is not None:
-        from .streaming import regime_map as chunked
-        return chunked(p, name_x, values_x, name_y, values_y, t_end, t_record, method, x0=x0,
+        return _regime_map_in_blocks(p, name_x, values_x, name_y, values_y, t_end, t_record, method, x0=x0,
                        v0=v0, dt=dt, rtol=rtol, atol=atol, workers=workers,
                        max_impacts=max_impacts, max_steps=max_steps, progress=progress,
                        cancel=cancel)
@@ -592,3 +538,222 @@ def regime_map(p: Params, name_x: str, values_x, name_y: str, values_y,
                      motions, params=p,
                      options=sweep_options(t_end=t_end, t_record=t_record, method=method,
                                            x0=x0, v0=v0, dt=dt, rtol=rtol, atol=atol))
+
+
+# ------------------------------------------------------------------ the Lyapunov sweep
+
+
+@jit
+def lyapunov_sweep_kernel(sps, x0s, v0, t_end, t_record, hmaxs, rates, out_t, out_v, counts,
+                          status, finals, lyap, warm, max_impacts, max_steps):
+    """sweep_kernel (exact method, no classification) with the tangent carried
+    along by the engine: lyap[i] = (sum log|R11|, sum log|R22|, stuck in window, impacts in window)
+    of value i over its window [t0 + t_record, t0 + t_end]."""
+    nvals = sps.shape[0]
+    marks = np.empty(2)
+    logs = np.zeros((1, 2))
+    res = np.empty(E.NRES)
+    none = np.empty(0)
+    stick = np.empty((0, 2))
+    x, v, t0 = x0s[0], v0, 0.0
+    for i in range(nvals):
+        sp = sps[i]
+        om = sp[5]
+        if not warm:
+            x = x0s[i]
+        elif i > 0:
+            x = finals[i - 1, 1]
+            v = finals[i - 1, 2]
+            ph = sps[i - 1, 5] * finals[i - 1, 0]
+            ph = ph - 2.0 * math.pi * math.floor(ph / (2.0 * math.pi))
+            t0 = ph / om
+        marks[0] = t0 + t_record
+        marks[1] = t0 + t_end
+        logs[0, 0] = 0.0
+        logs[0, 1] = 0.0
+        ctl = E.controls(t0 + t_end, t0 + t_record, hmaxs[i], rates[i], 0.0, 0.0, 0.0,
+                         max_impacts, max_steps, E.EXACT, E.QR_MARKS)
+        buf = Buffers(out_t[i], out_v[i], stick, none, none, none, none, none, none, marks,
+                      logs)
+        st = E.run_engine(sp, ctl, t0, x, v, buf, res)
+        counts[i] = int(res[E.N_REC])
+        status[i] = st
+        finals[i, 0] = res[E.T_F]
+        finals[i, 1] = res[E.X_F]
+        finals[i, 2] = res[E.V_F]
+        finals[i, 3] = res[E.STUCK]
+        lyap[i, 0] = logs[0, 0]
+        lyap[i, 1] = logs[0, 1]
+        lyap[i, 2] = res[E.STUCK_MARKED]
+        lyap[i, 3] = res[E.N_MARKED]
+
+
+def largest_exponents(sps_c, sps_r, lyap, status, tau, out_t, out_v, counts, t_lo, t_hi):
+    """The largest exponent per value from the sweep kernel's sums: -inf where the motion
+    sticks in the window, NaN where it grows without bound or stopped at a work limit."""
+    lam = np.maximum(lyap[:, 0], lyap[:, 1]) / tau
+    lam = np.where(lyap[:, 2] > 0, -math.inf, lam)
+    lam = np.where(status == RunStatus.IMPACT_LIMIT, math.nan, lam)
+    lam = np.where(status == RunStatus.STEP_LIMIT, math.nan, lam)
+    for i in np.flatnonzero((sps_c == 0.0) & (sps_r == 1.0)):
+        k = min(counts[i], out_t.shape[1])
+        if grows_without_bound(out_t[i, :k], out_v[i, :k], t_lo[i], t_hi[i]):
+            lam[i] = math.nan
+    return lam
+
+
+def bifurcation_with_lyapunov(p, name, values, t_end, t_record, method, x0, v0, warm_start,
+                              dt, rtol, atol, workers, cap_per_value, max_impacts, max_steps):
+    """:func:`impactlib.bifurcation` with ``lyapunov=True``: the same runs (the exact
+    kernels, the same scheduling) with the tangent carried along, so the diagram's rows
+    come with the largest exponent of each value over the diagram's own window."""
+    if method != "exact":
+        raise ValueError(f"lyapunov=True needs method='exact' (got method={method!r}): the "
+                         "exponents come from the exact flow and saltation Jacobians")
+    t_end, t_record, x0c, v0, _, dt, rtol, atol = _check_sweep(
+        p, [name], t_end, t_record, x0, v0, method, dt, rtol, atol)
+    values = _values_array(name, values)
+    if warm_start not in (False, True, "up", "down", "both"):
+        raise ValueError(f"warm_start={warm_start!r} must be False, 'up', 'down' or 'both'")
+    if not t_record < t_end:
+        raise ValueError(f"invalid sweep: t_record={t_record!r} must be < t_end={t_end!r} "
+                         "for Lyapunov exponents over [t_record, t_end]")
+    tic = time.perf_counter()
+    ex = _executor(workers)
+    n = values.size
+    sps, hmaxs, rates = _param_rows(p, {name: values}, method, dt, x0)
+    T_of = 2 * math.pi / sps[:, 5]
+    if x0 is not None:
+        x0s = np.full(n, x0c)
+    elif name == "g":
+        x0s = np.maximum(0.0, values)
+    else:
+        x0s = np.full(n, max(0.0, p.g))
+
+    def run(order, warm):
+        k = order.size
+        out_t = np.empty((k, cap_per_value))
+        out_v = np.empty((k, cap_per_value))
+        counts = np.zeros(k, dtype=np.int64)
+        status = np.zeros(k, dtype=np.int64)
+        finals = np.zeros((k, 4))
+        lyap = np.zeros((k, 4))
+        lyapunov_sweep_kernel(sps[order], np.ascontiguousarray(x0s[order]), v0, t_end, t_record,
+                              hmaxs[order], rates[order], out_t, out_v, counts, status, finals,
+                              lyap, warm, max_impacts, max_steps)
+        status = np.where((status == RunStatus.OK) & (counts > cap_per_value),
+                          RunStatus.OUTPUT_FULL, status)
+        t0 = finals[:, 0] - t_end
+        lam = largest_exponents(sps[order, 1], sps[order, 4], lyap, status, t_end - t_record,
+                                out_t, out_v, counts, t0 + t_record, t0 + t_end)
+        return out_t, out_v, counts, status, lam
+
+    jobs = []
+    if warm_start:
+        srt = np.argsort(values, kind="stable")
+        for d in {"up": [1], True: [1], "down": [-1], "both": [1, -1]}[warm_start]:
+            order = srt if d > 0 else srt[::-1]
+            jobs.append((d, order, ex.submit(run, order, True)))
+    else:
+        nchunks = min(n, max(4 * (workers or worker_count()), int(math.ceil(n / 128))))
+        for j in range(nchunks):
+            order = np.arange(j, n, nchunks)
+            jobs.append((0, order, ex.submit(run, order, False)))
+    parts = []
+    lam_all = np.full(n, -math.inf)
+    for d, order, fut in jobs:
+        out_t, out_v, counts, st, lam = fut.result()
+        parts.append((order, st, counts, _rows(values, order, T_of, out_t, out_v, counts, d)))
+        # warm "both": the larger of the two directions' exponents (NaN if either is)
+        lam_all[order] = np.maximum(lam_all[order], lam)
+    bif = merge_parts(name, values, parts, time.perf_counter() - tic)
+    return dataclasses.replace(bif, lyapunov=lam_all, params=p, options=sweep_options(
+        t_end=t_end, t_record=t_record, method=method, x0=x0, v0=v0, warm_start=warm_start,
+        lyapunov=True))
+
+
+# ------------------------------------------------------------------ chunked sweeps
+
+#: values per bifurcation chunk; rows per regime-map block (progress and cancel)
+VALUES_PER_CHUNK = 64
+ROWS_PER_BLOCK = 2
+
+
+def merge_bifurcations(parts: list) -> Bifurcation:
+    """One Bifurcation of successive chunks of values (as :func:`iter_bifurcation` yields)."""
+    first = parts[0]
+    offsets = np.cumsum([0] + [b.values.size for b in parts[:-1]])
+    cat = np.concatenate
+    lyap = None if first.lyapunov is None else cat([b.lyapunov for b in parts])
+    return dataclasses.replace(
+        first, values=cat([b.values for b in parts]), param=cat([b.param for b in parts]),
+        v=cat([b.v for b in parts]), t=cat([b.t for b in parts]),
+        phase=cat([b.phase for b in parts]),
+        index=cat([b.index + o for b, o in zip(parts, offsets)]),
+        direction=cat([b.direction for b in parts]), status=cat([b.status for b in parts]),
+        n_impacts=cat([b.n_impacts for b in parts]),
+        elapsed=float(sum(b.elapsed for b in parts)), lyapunov=lyap)
+
+
+def _bifurcation_in_chunks(p, name, values, *args, progress=None, cancel=None, chunk: int = VALUES_PER_CHUNK,
+                **kwargs) -> Bifurcation:
+    """:func:`impactlib.bifurcation` in chunks of ``chunk`` values, with ``progress`` and
+    ``cancel`` (see :mod:`impactlib.progress`).  A warm-started sweep is one chain: it reports once, at
+    its end, and cannot be stopped midway."""
+    values = _values_array(name, values)
+    update, close = reporter(progress, values.size, "values")
+    try:
+        if kwargs.get("warm_start"):
+            bif = bifurcation(p, name, values, *args, **kwargs)
+            update(values.size)
+            return bif
+        parts = []
+        for a in range(0, values.size, chunk):
+            if parts and stopped(cancel):
+                break
+            parts.append(bifurcation(p, name, values[a:a + chunk], *args, **kwargs))
+            update(min(values.size, a + chunk))
+        return merge_bifurcations(parts)
+    finally:
+        close()
+
+
+def iter_regime_map(p, name_x, values_x, name_y, values_y, *args, rows: int = ROWS_PER_BLOCK, **kwargs):
+    """Yield the RegimeMap of successive blocks of ``rows`` values of ``name_y`` (all of
+    ``values_x`` each); :func:`merge_regime_maps` joins them.  Stop iterating to cancel."""
+    vy = _values_array(name_y, values_y)
+    for a in range(0, vy.size, rows):
+        yield regime_map(p, name_x, values_x, name_y, vy[a:a + rows], *args, **kwargs)
+
+
+def merge_regime_maps(parts: list) -> RegimeMap:
+    """One RegimeMap of successive row blocks (as :func:`iter_regime_map` yields)."""
+    first = parts[0]
+    motions, row = {}, 0
+    for rm in parts:
+        motions.update({(iy + row, ix): mo for (iy, ix), mo in rm.motions.items()})
+        row += rm.values_y.size
+    return dataclasses.replace(
+        first, values_y=np.concatenate([rm.values_y for rm in parts]),
+        impacts=np.concatenate([rm.impacts for rm in parts]),
+        period=np.concatenate([rm.period for rm in parts]),
+        status=np.concatenate([rm.status for rm in parts]),
+        elapsed=float(sum(rm.elapsed for rm in parts)), motions=motions)
+
+
+def _regime_map_in_blocks(p, name_x, values_x, name_y, values_y, *args, progress=None, cancel=None,
+               rows: int = ROWS_PER_BLOCK, **kwargs) -> RegimeMap:
+    """:func:`impactlib.regime_map` in blocks of ``rows`` rows, with ``progress`` (rows
+    done) and ``cancel`` (see :mod:`impactlib.progress`)."""
+    vy = _values_array(name_y, values_y)
+    update, close = reporter(progress, vy.size, "rows")
+    parts = []
+    try:
+        for rm in iter_regime_map(p, name_x, values_x, name_y, vy, *args, rows=rows, **kwargs):
+            parts.append(rm)
+            update(sum(r.values_y.size for r in parts))
+            if stopped(cancel):
+                break
+        return merge_regime_maps(parts)
+    finally:
+        close()

@@ -47,13 +47,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._jit import jit
+from ..kernels._jit import jit
 from .continuation import (Event, segments_clearance, segments_monodromy, segments_residual,
                            segments_section)
-from .flight import G, R, flight_state, start_segment, system_constants
-from .io.header import write_csv
-from .model import FIELDS, MAGNITUDE_MAX, MAGNITUDE_MIN, PARAM_NAMES, Params
-from .tangent import flow_jacobian, saltation
+from ..kernels.flight import G, R, flight_state, start_segment, system_constants
+from ..io.header import write_csv
+from ..model import FIELDS, MAGNITUDE_MAX, MAGNITUDE_MIN, PARAM_NAMES, Params
+from ..kernels.tangent import flow_jacobian, saltation
 
 KINDS = ("period-doubling", "saddle-node", "grazing")
 NEWTON_TOL = 1e-11

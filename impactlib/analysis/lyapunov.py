@@ -18,17 +18,15 @@ sub-windows of the record window (their spread divided by sqrt(windows)).
 """
 from __future__ import annotations
 
-import dataclasses
 import math
 from dataclasses import dataclass
 
 import numpy as np
 
-from ._jit import jit
-from .model import Params, RunLimits, check_run
-from .simulate import run_constants
-from .tangent import tangent_run
-from impactlib.io.result import Result
+from ..model import Params, RunLimits, RunStatus, check_run
+from ..kernels import engine as E
+from ..simulate import run_constants
+from ..io.result import Result
 
 WINDOWS = 10
 GROWTH = 1.25        # last quarter's largest |v| over the first's: unbounded (no dissipation)
@@ -106,12 +104,18 @@ def lyapunov_run(p: Params, t0, x0, v0, t_end, t_record, windows=WINDOWS, keep_i
         cap = int(min(limits.max_impacts, 8 * ((t_end - t_record) / p.T + 2) + 1024))
     imp_t = np.empty(cap)
     imp_v = np.empty(cap)
-    out = tangent_run(sp, t0, x0, v0, t_end, t_record, hmax, rate, marks, True, imp_t, imp_v,
-                      logs, limits.max_impacts, limits.max_steps)
-    (status, n_rec, n_tot, tf, xf, vf, stuck, nsteps, _, _, _, _, stuck_m, n_m, vmin,
-     n_tail) = out
-    k = min(n_rec, cap)
-    return logs, marks, status, bool(stuck_m), n_m, imp_t[:k], imp_v[:k], (tf, xf, vf, bool(stuck))
+    ctl = E.controls(t_end, t_record, hmax, rate, 0.0, 0.0, 0.0, limits.max_impacts,
+                     limits.max_steps, E.EXACT, E.QR_MARKS)
+    res = np.empty(E.NRES)
+    status = E.run_engine(sp, ctl, t0, x0, v0,
+                          E.buffers(imp_t=imp_t, imp_v=imp_v, marks=marks, logs=logs), res)
+    if status == RunStatus.OUTPUT_FULL:
+        # the impacts are a side output here (kept for the growth test, or not at all)
+        status = RunStatus.OK
+    k = min(int(res[E.N_REC]), cap)
+    final = (float(res[E.T_F]), float(res[E.X_F]), float(res[E.V_F]), res[E.STUCK] != 0.0)
+    return (logs, marks, status, res[E.STUCK_MARKED] != 0.0, int(res[E.N_MARKED]), imp_t[:k],
+            imp_v[:k], final)
 
 
 def lyapunov(p: Params, t_end: float = 5000.0, t_record: float = 500.0, x0: float | None = None,
@@ -163,7 +167,7 @@ def lyapunov_from(p, t0, x0, v0, t_end, t_record, windows=WINDOWS,
         exps = np.full(2, math.nan)
         err = np.full(2, math.nan)
         msg = "unbounded (no dissipation): the impact speed keeps growing; no exponents"
-    elif status != 0:
+    elif status != RunStatus.OK:
         exps = np.full(2, math.nan)
         err = np.full(2, math.nan)
         msg = "the run stopped at a work limit before t_end; no exponents"
@@ -180,134 +184,4 @@ def lyapunov_from(p, t0, x0, v0, t_end, t_record, windows=WINDOWS,
         msg = f"averaged over [{t_record:g}, {t_end:g}] ({n_m} impacts)"
     return Lyapunov(params=p, exponents=exps, error=err, n_impacts=int(n_m), nu=nu,
                     window=(t_record, t_end), sticks=stuck, unbounded=bool(unbounded),
-                    status=int(status), message=msg, final=final)
-
-
-# ------------------------------------------------------------------ sweeps
-
-
-@jit
-def lyapunov_sweep_kernel(sps, x0s, v0, t_end, t_record, hmaxs, rates, out_t, out_v, counts,
-                          status, finals, lyap, warm, max_impacts, max_steps):
-    """sweeps.sweep_kernel (exact method, no classification) with the tangent carried
-    along: lyap[i] = (sum log|R11|, sum log|R22|, stuck in window, impacts in window)
-    of value i over its window [t0 + t_record, t0 + t_end]."""
-    nvals = sps.shape[0]
-    marks = np.empty(2)
-    logs = np.zeros((1, 2))
-    x, v, t0 = x0s[0], v0, 0.0
-    for i in range(nvals):
-        sp = sps[i]
-        om = sp[5]
-        if not warm:
-            x = x0s[i]
-        elif i > 0:
-            x = finals[i - 1, 1]
-            v = finals[i - 1, 2]
-            ph = sps[i - 1, 5] * finals[i - 1, 0]
-            ph = ph - 2.0 * math.pi * math.floor(ph / (2.0 * math.pi))
-            t0 = ph / om
-        marks[0] = t0 + t_record
-        marks[1] = t0 + t_end
-        logs[0, 0] = 0.0
-        logs[0, 1] = 0.0
-        (st, n_rec, n_tot, tf, xf, vf, stuck, nsteps, j11, j12, j21, j22, stuck_m, n_m, vmin,
-         n_tail) = tangent_run(sp, t0, x, v, t0 + t_end, t0 + t_record, hmaxs[i], rates[i],
-                               marks, True, out_t[i], out_v[i], logs, max_impacts, max_steps)
-        counts[i] = n_rec
-        status[i] = st
-        finals[i, 0] = tf
-        finals[i, 1] = xf
-        finals[i, 2] = vf
-        finals[i, 3] = 1.0 if stuck else 0.0
-        lyap[i, 0] = logs[0, 0]
-        lyap[i, 1] = logs[0, 1]
-        lyap[i, 2] = 1.0 if stuck_m else 0.0
-        lyap[i, 3] = n_m
-
-
-def largest_exponents(sps_c, sps_r, lyap, status, tau, out_t, out_v, counts, t_lo, t_hi):
-    """The largest exponent per value from the sweep kernel's sums: -inf where the motion
-    sticks in the window, NaN where it grows without bound or stopped at a work limit."""
-    lam = np.maximum(lyap[:, 0], lyap[:, 1]) / tau
-    lam = np.where(lyap[:, 2] > 0, -math.inf, lam)
-    lam = np.where(status == 1, math.nan, lam)
-    lam = np.where(status == 2, math.nan, lam)
-    for i in np.flatnonzero((sps_c == 0.0) & (sps_r == 1.0)):
-        k = min(counts[i], out_t.shape[1])
-        if grows_without_bound(out_t[i, :k], out_v[i, :k], t_lo[i], t_hi[i]):
-            lam[i] = math.nan
-    return lam
-
-
-def bifurcation_with_lyapunov(p, name, values, t_end, t_record, method, x0, v0, warm_start,
-                              dt, rtol, atol, workers, cap_per_value, max_impacts, max_steps):
-    """:func:`impactlib.bifurcation` with ``lyapunov=True``: the same runs (the exact
-    kernels, the same scheduling) with the tangent carried along, so the diagram's rows
-    come with the largest exponent of each value over the diagram's own window."""
-    import time
-
-    from . import sweeps
-
-    if method != "exact":
-        raise ValueError(f"lyapunov=True needs method='exact' (got method={method!r}): the "
-                         "exponents come from the exact flow and saltation Jacobians")
-    t_end, t_record, x0c, v0, _, dt, rtol, atol = sweeps._check_sweep(
-        p, [name], t_end, t_record, x0, v0, method, dt, rtol, atol)
-    values = sweeps._values_array(name, values)
-    if warm_start not in (False, True, "up", "down", "both"):
-        raise ValueError(f"warm_start={warm_start!r} must be False, 'up', 'down' or 'both'")
-    if not t_record < t_end:
-        raise ValueError(f"invalid sweep: t_record={t_record!r} must be < t_end={t_end!r} "
-                         "for Lyapunov exponents over [t_record, t_end]")
-    tic = time.perf_counter()
-    ex = sweeps._executor(workers)
-    n = values.size
-    sps, hmaxs, rates = sweeps._param_rows(p, {name: values}, method, dt, x0)
-    T_of = 2 * math.pi / sps[:, 5]
-    if x0 is not None:
-        x0s = np.full(n, x0c)
-    elif name == "g":
-        x0s = np.maximum(0.0, values)
-    else:
-        x0s = np.full(n, max(0.0, p.g))
-
-    def run(order, warm):
-        k = order.size
-        out_t = np.empty((k, cap_per_value))
-        out_v = np.empty((k, cap_per_value))
-        counts = np.zeros(k, dtype=np.int64)
-        status = np.zeros(k, dtype=np.int64)
-        finals = np.zeros((k, 4))
-        lyap = np.zeros((k, 4))
-        lyapunov_sweep_kernel(sps[order], np.ascontiguousarray(x0s[order]), v0, t_end, t_record,
-                              hmaxs[order], rates[order], out_t, out_v, counts, status, finals,
-                              lyap, warm, max_impacts, max_steps)
-        status = np.where((status == 0) & (counts > cap_per_value), 3, status)
-        t0 = finals[:, 0] - t_end
-        lam = largest_exponents(sps[order, 1], sps[order, 4], lyap, status, t_end - t_record,
-                                out_t, out_v, counts, t0 + t_record, t0 + t_end)
-        return out_t, out_v, counts, status, lam
-
-    jobs = []
-    if warm_start:
-        srt = np.argsort(values, kind="stable")
-        for d in {"up": [1], True: [1], "down": [-1], "both": [1, -1]}[warm_start]:
-            order = srt if d > 0 else srt[::-1]
-            jobs.append((d, order, ex.submit(run, order, True)))
-    else:
-        nchunks = min(n, max(4 * (workers or sweeps.worker_count()), int(math.ceil(n / 128))))
-        for j in range(nchunks):
-            order = np.arange(j, n, nchunks)
-            jobs.append((0, order, ex.submit(run, order, False)))
-    parts = []
-    lam_all = np.full(n, -math.inf)
-    for d, order, fut in jobs:
-        out_t, out_v, counts, st, lam = fut.result()
-        parts.append((order, st, counts, sweeps._rows(values, order, T_of, out_t, out_v, counts, d)))
-        # warm "both": the larger of the two directions' exponents (NaN if either is)
-        lam_all[order] = np.maximum(lam_all[order], lam)
-    bif = sweeps.merge_parts(name, values, parts, time.perf_counter() - tic)
-    return dataclasses.replace(bif, lyapunov=lam_all, params=p, options=sweeps.sweep_options(
-        t_end=t_end, t_record=t_record, method=method, x0=x0, v0=v0, warm_start=warm_start,
-        lyapunov=True))
+                    status=RunStatus(int(status)), message=msg, final=final)

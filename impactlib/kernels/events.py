@@ -244,11 +244,13 @@ def search_from(sp, seg, s, x, v, a, rh, xs, s_end, hmax, max_steps, nsteps):
                 s, vh, ns = _newton_in_bracket(sp, seg, s, s + tv, x - g, v, g, t0)
                 return IMPACT, s, vh, nsteps + ns
         tau = safe_step(max(f, 0.0), v, a, m3, h)
+        if tau >= s_end - s:
+            # clear of the wall up to s_end; tested first, since a remainder s_end - s
+            # at rounding level gives a step at rounding level that is no contact
+            return NO_IMPACT, s_end, v, nsteps
         if tau <= 4.0 * EPS * (t0 + s):
             # touching the wall at rest (tangency within rounding): a contact, v ~ 0
             return IMPACT, s, min(v, 0.0), nsteps
-        if tau >= s_end - s:
-            return NO_IMPACT, s_end, v, nsteps
         s += tau
         x, v, a, j, rh, xs = flight_state(sp, seg, s)
         nsteps += 1

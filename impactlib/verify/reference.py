@@ -60,7 +60,7 @@ from dataclasses import dataclass, field
 import mpmath
 import numpy as np
 
-from .model import Params
+from ..model import Params
 
 DPS = 40
 

@@ -17,10 +17,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._jit import jit
-from .events import HMAX_PERIODS_RESONANCE
+from ..kernels._jit import jit
+from ..kernels.events import HMAX_PERIODS_RESONANCE
 from .lyapunov import grows_without_bound, lyapunov_from, no_dissipation
-from .model import RunLimits
+from ..model import MotionCode, RunLimits
+
+_INF = int(MotionCode.INFINITE)
+_UNDETERMINED = int(MotionCode.UNDETERMINED)
+_NOT_SETTLED = int(MotionCode.NOT_SETTLED)
 
 PERIOD_RTOL = 1e-4    # transients of the paper's damping (c = 0.05) decay to ~1e-5 in 250 s
 MAX_PERIOD = 32
@@ -30,17 +34,17 @@ SETTLE_R2 = 0.8       # log-distance decay this well fitted by a line counts as 
 
 @jit
 def motion_class(pc_x, pc_v, imp_t, t_end, period_T, n_chatter, rtol, max_period):
-    """(m, n) from Poincare points and impact times in the window; -1 stands for infinity,
-    m = -3 for a transient still settling onto a period-n orbit."""
+    """(m, n) from Poincare points and impact times in the window, with the codes of
+    :class:`impactlib.model.MotionCode` (INFINITE, UNDETERMINED, NOT_SETTLED)."""
     npts = pc_x.shape[0]
     if npts < 4:
-        return -2, -2          # window too short to tell
+        return _UNDETERMINED, _UNDETERMINED     # window too short to tell
     scale = 1e-300
     for i in range(npts):
         scale = max(scale, abs(pc_x[i]), abs(pc_v[i]))
     tol = rtol * scale
     half = npts // 2
-    n = -1
+    n = _INF
     for cand in range(1, max_period + 1):
         if npts - half < 2 * cand:
             break
@@ -77,10 +81,10 @@ def motion_class(pc_x, pc_v, imp_t, t_end, period_T, n_chatter, rtol, max_period
             vy = syy - sy * sy / cnt
             cxy = sxy - sx * sy / cnt
             if vx > 0.0 and vy > 0.0 and cxy < 0.0 and cxy * cxy / (vx * vy) >= SETTLE_R2:
-                return -3, cand
-        return (-1 if imp_t.shape[0] > 0 else 0), -1
+                return _NOT_SETTLED, cand
+        return (_INF if imp_t.shape[0] > 0 else 0), _INF
     if n_chatter > 0:
-        return -1, n
+        return _INF, n
     t_from = t_end - n * period_T
     m = 0
     for i in range(imp_t.shape[0]):
@@ -90,7 +94,7 @@ def motion_class(pc_x, pc_v, imp_t, t_end, period_T, n_chatter, rtol, max_period
 
 
 def _inf(v):
-    return math.inf if v == -1 else v
+    return math.inf if v == MotionCode.INFINITE else v
 
 
 @dataclass(frozen=True)
@@ -108,28 +112,46 @@ class Motion:
 
 
 def describe(m: int, n: int) -> Motion:
-    """Motion from the kernel's (m, n) codes."""
-    if n == -2:
+    """Motion from the kernel's (m, n) codes (counts, or :class:`MotionCode`)."""
+    if n == MotionCode.UNDETERMINED:
         return Motion(math.nan, math.nan, "undetermined",
                       "undetermined (record window shorter than 4 periods)")
     mi, ni = _inf(m), _inf(n)
     sym = lambda v: "∞" if v == math.inf else str(int(v))  # noqa: E731
-    if m == -3:
+    if m == MotionCode.NOT_SETTLED:
         return Motion(math.nan, math.nan, "not settled",
                       f"not settled (approaching period-{n}; lengthen the transient)")
     if m == 0:
         kind = "no impact"
         label = f"no impact (period-{sym(ni)})"
-    elif n == -1:
+    elif n == MotionCode.INFINITE:
         kind = "chaotic"
         label = f"chaotic ({sym(mi)}-impact period-{sym(ni)})"
-    elif m == -1:
+    elif m == MotionCode.INFINITE:
         kind = "complete chattering"
         label = f"complete chattering (∞-impact period-{sym(ni)})"
     else:
         kind = "periodic"
         label = f"{sym(mi)}-impact period-{sym(ni)}"
     return Motion(mi, ni, kind, label)
+
+
+def lyapunov_budget(sol) -> RunLimits:
+    """Work limits of the Lyapunov run that judges a solution's aperiodic motion: about
+    the work of the solution itself, plus the certified walk's steps (at most a quarter
+    period each) that the search falls back to near grazing."""
+    window = sol.t_end - sol.t_record
+    walk = 2 * math.ceil(window / (HMAX_PERIODS_RESONANCE * sol.params.T)) + 8 * sol.n_impacts
+    return RunLimits(max_impacts=2 * sol.n_impacts + 1000,
+                     max_steps=2 * sol.nsteps + walk + 10000)
+
+
+def measure_lyapunov(sol):
+    """Both Lyapunov exponents of the exact flow continued from where ``sol`` ends, over a
+    window as long as its own, within :func:`lyapunov_budget`."""
+    tf, xf, vf, stuck = sol.final
+    window = sol.t_end - sol.t_record
+    return lyapunov_from(sol.params, tf, xf, vf, tf + window, tf, limits=lyapunov_budget(sol))
 
 
 def classify(sol, rtol: float = PERIOD_RTOL, max_period: int = MAX_PERIOD) -> Motion:
@@ -144,25 +166,30 @@ def classify(sol, rtol: float = PERIOD_RTOL, max_period: int = MAX_PERIOD) -> Mo
     integrator (rk4, rk45) are judged against the exact flow: if that contracts, the
     integrator's error is what kept the points from repeating.
     """
+    return classify_measured(sol, rtol, max_period)[0]
+
+
+def classify_measured(sol, rtol: float = PERIOD_RTOL, max_period: int = MAX_PERIOD):
+    """(Motion, Lyapunov or None): :func:`classify` with the Lyapunov measurement it
+    made (None where the maps decided alone), for callers that show the exponents."""
     p = sol.params
     m, n = motion_class(np.ascontiguousarray(sol.poincare.x), np.ascontiguousarray(sol.poincare.v),
                         np.ascontiguousarray(sol.impacts.t), sol.t_end, p.T, sol.n_chatter,
                         rtol, max_period)
     motion = describe(m, n)
     if motion.kind != "chaotic":
-        return motion
+        return motion, None
     if no_dissipation(p) and grows_without_bound(sol.impacts.t, sol.impacts.v, sol.t_record,
                                                  sol.t_end):
         return Motion(math.nan, math.nan, "unbounded",
-                      "unbounded (no dissipation): the impact speed grows every cycle")
-    tf, xf, vf, stuck = sol.final
+                      "unbounded (no dissipation): the impact speed grows every cycle"), None
+    ly = measure_lyapunov(sol)
+    return _judged(sol, motion, ly, max_period), ly
+
+
+def _judged(sol, motion, ly, max_period) -> Motion:
+    """The verdict on an aperiodic motion from its Lyapunov measurement ``ly``."""
     window = sol.t_end - sol.t_record
-    # at most about the work of the solution itself, plus the certified walk's steps (at
-    # most a quarter period each) that the search falls back to near grazing
-    walk = 2 * math.ceil(window / (HMAX_PERIODS_RESONANCE * p.T)) + 8 * sol.n_impacts
-    budget = RunLimits(max_impacts=2 * sol.n_impacts + 1000,
-                       max_steps=2 * sol.nsteps + walk + 10000)
-    ly = lyapunov_from(p, tf, xf, vf, tf + window, tf, limits=budget)
     lam, err = float(ly.exponents[0]), float(ly.error[0])
     coarse = ""
     if sol.method != "exact":

@@ -26,8 +26,8 @@ import time
 
 import numpy as np
 
-from .model import Params
-from .sweeps import (CAP_PER_VALUE, Bifurcation, RegimeMap, _check_sweep, merge_parts,
+from ..model import Params
+from .diagrams import (CAP_PER_VALUE, Bifurcation, RegimeMap, _check_sweep, merge_parts,
                      _values_array, sweep_options, bifurcation as _local_bifurcation,
                      regime_map as _local_regime_map)
 

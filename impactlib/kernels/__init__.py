@@ -1,0 +1,3 @@
+"""Every jitted building block of a run: the closed-form flight (flight), the certified
+impact search, contact and chatter (events), the integrators (integrators), the tangent
+algebra (tangent) and the one event loop that drives them all (engine)."""
