@@ -31,6 +31,8 @@ from .scenes import SCENES
 from .settings import MODES, ON_DIAGRAM, RESEARCH, SETTINGS
 
 DRAWER_WIDTH = 320
+#: The diagram status chip's background at ``pct`` per cent done.
+PROGRESS = "linear-gradient(90deg, #cfe0f5 {pct}%, transparent {pct}%)"
 #: The settings a lesson moves most: always on screen, in the bar under the header.
 BAR = ("omega", "r", "c", "g")
 #: "i" in a circle, drawn (no font on a lab PC needs to have the character).
@@ -98,7 +100,7 @@ def make_widget(settings, s):
     if s.widget == "radio":
         radio = pn.widgets.RadioButtonGroup.from_param(
             par, name="", options={c.capitalize(): c for c in s.choices}, description=None,
-            css_classes=css, margin=(4, 5))
+            css_classes=css, margin=(2, 4))
         return radio, radio
     if s.widget == "slider":
         box = pn.widgets.FloatInput.from_param(par, label=s.label, format=s.fmt,
@@ -109,7 +111,7 @@ def make_widget(settings, s):
         return box, pn.Column(box, slider, css_classes=css, sizing_mode="stretch_width")
     if s.widget == "toggle":
         toggle = pn.widgets.Toggle.from_param(par, label=s.label, color="default", width=100,
-                                              margin=(4, 5), css_classes=css)
+                                              margin=(2, 4), css_classes=css)
         return toggle, toggle
     common = dict(label=s.label, sizing_mode="stretch_width", css_classes=css)
     if s.widget == "checkbox":
@@ -158,9 +160,9 @@ class Controls:
         self.rooms: dict = {}
         self.mode = None
         self.message = ""
-        self.message_pane = pn.pane.Alert("", alert_type="warning", visible=False,
-                                          css_classes=["ie-message"], stylesheets=[MESSAGE_CSS],
-                                          sizing_mode="stretch_width", margin=0)
+        self.message_pane = pn.pane.HTML("", visible=False, css_classes=["ie-message"],
+                                         stylesheets=[MESSAGE_CSS], sizing_mode="stretch_width",
+                                         margin=0)
         self.badge = pn.pane.HTML("", css_classes=["ie-badge"], stylesheets=[CSS, LINE_CSS],
                                   margin=(0, 5))
         self.stability = NamedHTML("", model_name=STABILITY_NAME,
@@ -172,11 +174,8 @@ class Controls:
         self._quiet = False               # the picker is being set by the page, not a user
         self.scene_picker = pn.widgets.Select(
             options={PICK: PICK, **{sc.label: sc.key for sc in SCENES}}, value=PICK,
-            css_classes=["ie-scene"], width=180, margin=(4, 5))
+            css_classes=["ie-scene"], width=180, margin=(2, 4))
         self.scene_picker.param.watch(lambda event: self._picked(event.new, on_scene), "value")
-        self.progress = pn.indicators.Progress(value=0, max=100, width=90, height=10,
-                                               bar_color="primary", margin=(9, 5),
-                                               css_classes=["ie-progress"])
         self.diagram_status = NamedHTML("", model_name=STATUS_NAME,
                                         css_classes=["ie-diagram-status"],
                                         stylesheets=[CSS, LINE_CSS], margin=(0, 5))
@@ -187,11 +186,11 @@ class Controls:
         self.accuracy_button.on_click(lambda event: on_accuracy())
         self.accuracy_pane = self.accuracy_modal = None      # built on first use
         self.sidebar_toggle = pn.widgets.Toggle(label="☰ Settings", value=False, width=104,
-                                                margin=(4, 5), css_classes=["ie-sidebar-toggle"])
-        self.png_button = pn.widgets.Button(label="Save PNG", width=90, margin=(4, 5),
+                                                margin=(2, 4), css_classes=["ie-sidebar-toggle"])
+        self.png_button = pn.widgets.Button(label="Save PNG", width=90, margin=(2, 4),
                                             css_classes=["ie-png"])
         self.png_button.js_on_click(code=PNG_JS)
-        self.pin_toggle = pn.widgets.Toggle(label="Pin maps", width=86, margin=(4, 5),
+        self.pin_toggle = pn.widgets.Toggle(label="Pin maps", width=86, margin=(2, 4),
                                             css_classes=["ie-pin"])
         self.layout = self._layout(views)
 
@@ -237,17 +236,19 @@ class Controls:
 
     @staticmethod
     def _notes(views):
-        """"What am I looking at?": one or two sentences per view, folded (one model)."""
+        """The page's title and "What am I looking at?": one or two sentences per view,
+        folded (one model)."""
         items = []
         for v in views:
             title, note = ((v.figure.title.text, v.note) if v.note else
                            EXTRA_NOTES.get(v.key, ("", "")))
             if note:
                 items.append(f"<p><b>{title}</b>: {note}</p>")
-        return pn.pane.HTML(f"<details><summary title='What am I looking at?'>{INFO_ICON}"
-                            "<span class='ie-notes-label'> What am I looking at?</span>"
-                            "</summary><div>" + "".join(items) + "</div></details>",
-                            stylesheets=[NOTE_CSS], margin=(8, 5), css_classes=["ie-notes"])
+        return pn.pane.HTML("<b class='ie-title'>Impact Explorer</b><details><summary "
+                            f"title='What am I looking at?'>{INFO_ICON}<span "
+                            "class='ie-notes-label'> What am I looking at?</span></summary>"
+                            "<div>" + "".join(items) + "</div></details>",
+                            stylesheets=[NOTE_CSS], margin=(2, 5), css_classes=["ie-notes"])
 
     def _layout(self, views):
         # the bar comes first in the page (ω's box is the first Tab stop), the header
@@ -255,18 +256,17 @@ class Controls:
         self.bar = bar = pn.Row(*(w for n in BAR for w in self._items[n]), css_classes=["ie-bar"],
                      stylesheets=[BAR_CSS], sizing_mode="stretch_width", margin=0)
         self._items["branches"].name = "Branches"    # short, in the header (its doc: drawer)
+        self.notes = self._notes(views)
         self.header = pn.Row(
-            self.sidebar_toggle,
-            pn.pane.HTML("<b>Impact Explorer</b>", margin=(8, 5), css_classes=["ie-title"]),
-            self.scene_picker,
+            self.sidebar_toggle, self.notes, self.scene_picker,
             *(self._items[s.name] for s in SETTINGS if s.group in ("header", ON_DIAGRAM)),
-            self.pin_toggle, self.png_button, self._notes(views),
+            self.pin_toggle, self.png_button,
             css_classes=["ie-header"], stylesheets=[HEADER_CSS], sizing_mode="stretch_width",
             margin=0)
         self.top = top = pn.Column(bar, self.header, css_classes=["ie-top"], stylesheets=[TOP_CSS],
                         sizing_mode="stretch_width", margin=0)
         self.info = info = pn.Row(self.message_pane, self.caption, self.badge, self.stability,
-                      self.progress, self.diagram_status, css_classes=["ie-info"],
+                      self.diagram_status, css_classes=["ie-info"],
                       stylesheets=[INFO_CSS], sizing_mode="stretch_width", margin=0)
         cells = [v for v in views if v.figure is not None and not v.under]
         self.grid = pn.Column(*(self._cell(v, [u for u in views if u.under == v.key])
@@ -279,7 +279,7 @@ class Controls:
         self.drawer = pn.Column(width=DRAWER_WIDTH, visible=False, stylesheets=[DRAWER_CSS],
                                 css_classes=["ie-drawer", "ie-sidebar"], margin=0)
         self.sidebar_toggle.param.watch(lambda e: self.show_drawer(e.new), "value")
-        self.main = pn.Column(top, info, self.stage, self.drawer, sizing_mode="stretch_both",
+        self.main = pn.Column(top, info, self.stage, sizing_mode="stretch_both",
                               stylesheets=[PAGE_CSS], css_classes=["ie-page"], margin=0)
         return self.main
 
@@ -288,6 +288,7 @@ class Controls:
         if visible and not self.drawer.objects:
             groups = [g for g in dict.fromkeys(s.group for s in SETTINGS)
                       if g not in ("header", RESEARCH, ON_DIAGRAM)]
+            self.main.append(self.drawer)
             close = pn.widgets.Button(label="✕ Close", width=90, margin=(4, 10),
                                       css_classes=["ie-drawer-close"])
             close.on_click(lambda event: self.show_drawer(False))
@@ -302,8 +303,8 @@ class Controls:
     def present(self, on: bool) -> None:
         """Presenter mode: the information line in large type, the drawer closed, the
         bar's four boxes in the header's line (TOP_CSS), so the figures keep their room."""
-        for pane in (self.top, self.bar, self.header, self.info, self.caption, self.badge,
-                     self.stability, self.diagram_status):
+        for pane in (self.top, self.bar, self.header, self.notes, self.info, self.caption,
+                     self.badge, self.stability, self.diagram_status):
             classes = [c for c in pane.css_classes if c != "ie-big"]
             pane.css_classes = classes + ["ie-big"] if on else classes
         if on:
@@ -378,12 +379,12 @@ class Controls:
         self._show_picker(None if changed else self._scene_key)
 
     def show_diagram(self, text: str, done: int | None = None, total: int | None = None):
-        """The diagram's status line (``bifurcation_status``) and progress bar."""
+        """The diagram's status line (``bifurcation_status``); its background fills
+        from the left as the diagram is computed (no progress bar model)."""
         self.diagram_status.object = text
-        if total:
-            self.progress.value = int(100 * done / total)
-        elif done == 0:
-            self.progress.value = 0
+        if total or done == 0:
+            pct = int(100 * (done or 0) / total) if total else 0
+            self.diagram_status.styles = {"background": PROGRESS.format(pct=pct)}
 
     def show_accuracy(self, html: str | None) -> None:
         """The accuracy table, in a full-width panel over the page; None while it is

@@ -41,11 +41,9 @@ TOP_CSS = f"""
 """
 HEADER_CSS = f"""
 :host {{ flex-wrap: wrap; align-items: center; border-bottom: 1px solid #ddd;
-         background: #f6f8fb; min-width: 0 !important; }}
-.ie-title {{ font-size: 18px; }}
-@media (max-width: 1099px) {{ .ie-title {{ display: none !important; }} }}
+         background: #f6f8fb; min-width: 0 !important; padding: 2px 0; }}
 :host(.ie-big) {{ flex-wrap: nowrap; border: none; background: none; }}
-:host(.ie-big) .ie-title, :host(.ie-big) .ie-pin, :host(.ie-big) .ie-png {{
+:host(.ie-big) .ie-pin, :host(.ie-big) .ie-png {{
   display: none !important; }}
 :host(.ie-big) .ie-scene {{ width: 150px !important; }}
 :host(.ie-big) .ie-notes {{ margin-right: 12px !important; }}
@@ -72,13 +70,12 @@ input { font-size: 16px; }
 #: motion, the stability and the diagram, and a banner over it when there is a message.
 #: Its height never changes, so results never move the figures.
 INFO_CSS = f"""
-:host {{ position: relative; flex: none !important; height: 32px; align-items: center;
+:host {{ position: relative; flex: none !important; height: 30px; align-items: center;
          flex-wrap: nowrap; overflow: visible; z-index: 40; }}
 :host(.ie-big) {{ height: 40px; }}
 .ie-caption {{ flex: 1 1 0% !important; min-width: 80px; }}
 .ie-badge, .ie-stability {{ flex: 0 1 auto !important; max-width: 25%; min-width: 0; }}
 .ie-diagram-status {{ flex: 0 1 auto !important; max-width: 17%; min-width: 0; }}
-.ie-progress {{ flex: none !important; }}
 .ie-message {{ position: absolute !important; left: 0; right: 0; top: 0; z-index: 45; }}
 @media (max-width: {NARROW}px) {{
   :host {{ height: auto; flex-wrap: wrap; }}
@@ -88,10 +85,11 @@ INFO_CSS = f"""
 #: A banner (bad link, work limit): one line over the information line; the whole
 #: message while the pointer is on it.
 MESSAGE_CSS = """
-:host { font-size: 16px; }
-.alert { margin: 0 !important; padding: 3px 10px !important; max-height: 32px;
-         overflow: hidden; white-space: nowrap; text-overflow: ellipsis; }
-:host(:hover) .alert { max-height: none; white-space: normal; }
+:host { font-size: 16px; background: #fff3cd; color: #664d03; border: 1px solid #ffe69c;
+        border-radius: 4px; }
+:host > div { padding: 3px 10px; max-height: 30px; overflow: hidden; white-space: nowrap;
+              text-overflow: ellipsis; line-height: 24px; }
+:host(:hover) > div { max-height: none; white-space: normal; }
 """
 STAGE_CSS = f"""
 :host {{ flex: 1 1 0% !important; min-height: 0; }}
@@ -146,8 +144,13 @@ FILL_CSS = """
 LEGEND_CSS = """
 :host { height: 100% !important; overflow-y: auto; }
 """
+#: The page's title and the notes' icon (the title left out on narrow screens and in
+#: presenter mode, class ``ie-big`` on the header).
 NOTE_CSS = """
-details { font-size: 16px; color: #333; }
+.ie-title { font-size: 18px; margin-right: 8px; white-space: nowrap; vertical-align: middle; }
+@media (max-width: 1099px) { .ie-title { display: none; } }
+:host(.ie-big) .ie-title { display: none; }
+details { font-size: 16px; color: #333; display: inline-block; vertical-align: middle; }
 summary { cursor: pointer; list-style: none; font-size: 20px; }
 details[open] div { position: fixed; z-index: 950; background: #fffbe8; margin: 2px 0;
                     padding: 6px 12px; border: 1px solid #e0c96b; border-radius: 4px;

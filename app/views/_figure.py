@@ -4,7 +4,7 @@ from __future__ import annotations
 import weakref
 
 from bokeh.models import (AllIndices, AllLabels, BasicTicker, BasicTickFormatter, DataRange1d,
-                          GlyphRenderer, LinearScale, PanTool, ResetTool, Selection,
+                          GlyphRenderer, Grid, LinearScale, PanTool, ResetTool, Selection,
                           UnionRenderers, WheelZoomTool)
 from bokeh.plotting import figure
 
@@ -44,6 +44,8 @@ def make_figure(name: str, title: str, x_label: str, y_label: str, **kw):
         axis.axis_label_text_font_style = "normal"
     fig.toolbar.logo = None
     fig.toolbar.autohide = True
+    # horizontal grid lines only: the vertical ones are a model each and read little
+    fig.center = [c for c in fig.center if not (isinstance(c, Grid) and c.dimension == 0)]
     style(fig, presenter=False)
     return fig
 
