@@ -23,7 +23,7 @@ import panel as pn
 from bokeh.layouts import column as bokeh_column
 import param
 
-from .page_style import (BAR_CSS, BAR_ITEM_CSS, CAPTION_CSS, CSS, DRAWER_CSS,
+from .page_style import (BAR_CSS, BAR_ITEM_CSS, CAPTION_CSS, COMPARE_CSS, CSS, DRAWER_CSS,
                          EXPLORE_CSS, HEADER_CSS, INFO_CSS, LINE_CSS, MESSAGE_CSS, MODAL_CSS,
                          NOTE_CSS, PAGE_CSS, PNG_JS, ROOM_CSS, STAGE_CSS, TOP_CSS)
 from .panel_fixes import GRID_COLUMN_CSS, PromptFloatSlider
@@ -325,15 +325,21 @@ class Controls:
             room.css_classes = classes if name == mode else classes + ["ie-off"]
         self.mode = mode
 
-    def compare_room(self, root):
-        """Compare mode's plot area: a heading and the small multiples."""
+    def compare_room(self, figures):
+        """Compare mode's plot area: a heading and the small multiples, five columns of
+        two rows on a wide screen (COMPARE_CSS)."""
+        for fig in figures:
+            fig.css_classes = [*fig.css_classes, "ie-cell"]
+        grid = pn.Column(*(pn.pane.Bokeh(f, sizing_mode="stretch_both", margin=0)
+                           for f in figures),
+                         stylesheets=[GRID_COLUMN_CSS, COMPARE_CSS], sizing_mode="stretch_both",
+                         css_classes=["ie-compare-plots"], margin=0)
         return pn.Column(
             pn.pane.HTML("<b>Side by side:</b> Fig. 3 (a)–(f), diagrams for r = 0 … 0.9; "
                          "Fig. 7 (a)–(d), Poincaré sections at ω = 2.8 — shared, fixed axes",
                          css_classes=["ie-compare-head"], stylesheets=[CSS, LINE_CSS],
                          sizing_mode="stretch_width", margin=(0, 5)),
-            pn.pane.Bokeh(root, sizing_mode="stretch_both", css_classes=["ie-compare-plots"]),
-            sizing_mode="stretch_both", css_classes=["ie-compare-panel"], margin=0)
+            grid, sizing_mode="stretch_both", css_classes=["ie-compare-panel"], margin=0)
 
     # -- what the session shows --------------------------------------------------------
 

@@ -81,7 +81,7 @@ class Explorer(pn.viewable.Viewer):
         share_helpers([v.figure for v in self.views if v.figure is not None])
         self.downloads = Downloads(self)
         rooms = {"compare": lambda: c.compare_room(
-                     self.compare.open(self.settings.presenter).root),
+                     self.compare.open(self.settings.presenter).figures),
                  "research": lambda: self.research.room}
         self.controls = c = Controls(self.settings, self.views, on_scene=self.load_scene,
                                      on_accuracy=self._on_accuracy, downloads=self.downloads,

@@ -92,7 +92,7 @@ MESSAGE_CSS = """
 :host(:hover) > div { max-height: none; white-space: normal; }
 """
 STAGE_CSS = f"""
-:host {{ flex: 1 1 0% !important; min-height: 0; }}
+:host {{ flex: 1 1 0% !important; min-height: 0; min-width: 0 !important; }}
 @media (max-width: {NARROW}px) {{ :host {{ flex: none !important; height: auto !important; }} }}
 """
 #: Explore: the four scene views in a row over the diagram (with its Lyapunov strip),
@@ -125,11 +125,28 @@ EXPLORE_CSS = f"""
                                "bifurcation" "bifurcation" "animation"; }}
 }}
 """
+#: Compare: Fig. 3 (a)-(e) over (f) and Fig. 7 (a)-(d); two columns of fixed height on a
+#: tablet, one on a phone.
+COMPARE_CSS = f"""
+:host {{ display: grid !important; gap: 4px; height: 100% !important; min-height: 0;
+        grid-template-columns: repeat(5, minmax(0, 1fr));
+        grid-template-rows: repeat(2, minmax(0, 1fr)); }}
+.ie-cell {{ min-width: 0; min-height: 0; height: auto !important; width: auto !important; }}
+@media (max-width: {NARROW}px) {{
+  :host {{ height: auto !important; grid-template-columns: repeat(2, minmax(0, 1fr));
+          grid-template-rows: none; grid-auto-rows: 260px; }}
+}}
+@media (max-width: 599px) {{ :host {{ grid-template-columns: minmax(0, 1fr); }} }}
+"""
 #: Compare and research (a mode not shown has the class ``ie-off``): the plot area is theirs; what does not fit scrolls inside it.
 ROOM_CSS = f"""
-:host {{ height: 100% !important; min-height: 0; overflow: auto; }}
+:host {{ height: 100% !important; min-height: 0; min-width: 0 !important; overflow: auto; }}
 :host(.ie-off) {{ display: none !important; }}
-@media (max-width: {NARROW}px) {{ :host {{ height: auto !important; }} }}
+@media (max-width: {NARROW}px) {{ :host {{ height: auto !important; overflow: visible; }} }}
+:host(.ie-research) {{ overflow: hidden; }}
+@media (max-width: {NARROW}px) {{
+  :host(.ie-research) {{ flex: none !important; height: 90vh !important; }}
+}}
 """
 DRAWER_CSS = """
 :host { position: fixed !important; top: 0; left: 0; bottom: 0; z-index: 900;
@@ -137,12 +154,14 @@ DRAWER_CSS = """
         box-shadow: 4px 0 16px #0004; padding: 4px 0; max-width: 100vw; }
 """
 #: A layout that fills its parent's height (research mode's tabs and their contents).
-FILL_CSS = """
-:host { min-height: 0; }
+FILL_CSS = f"""
+:host {{ min-height: 0; min-width: 0 !important; }}
+@media (max-width: {NARROW}px) {{ :host {{ flex-wrap: wrap; }} }}
 """
 #: A legend beside its figure: scrolls inside the plot area when it is taller.
-LEGEND_CSS = """
-:host { height: 100% !important; overflow-y: auto; }
+LEGEND_CSS = f"""
+:host {{ max-height: calc(100vh - 230px); overflow-y: auto; }}
+@media (max-width: {NARROW}px) {{ :host {{ max-height: 30vh; width: 100% !important; }} }}
 """
 #: The page's title and the notes' icon (the title left out on narrow screens and in
 #: presenter mode, class ``ie-big`` on the header).

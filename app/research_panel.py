@@ -65,6 +65,8 @@ class ResearchPanel:
         from .views._figure import share_helpers
         self.views = {MAP: RegimeMapView(), BASINS: BasinsView()}
         share_helpers([v.figure for v in self.views.values()])
+        for view in self.views.values():      # on a tablet or phone the room scrolls
+            view.figure.min_height = 360
         for view in self.views.values():
             view.connect(self._pick)
         self.status, self.progress, self.legend, self.buttons = {}, {}, {}, {}
@@ -92,7 +94,7 @@ class ResearchPanel:
             for n in names:             # (in the sidebar they would stretch; here not)
                 self._widgets[n].param.update(sizing_mode="fixed", width=150)
             controls = pn.Row(*(self._widgets[n] for n in names), button, stop, save,
-                              sizing_mode="stretch_width")
+                              sizing_mode="stretch_width", stylesheets=[FILL_CSS])
             controls.extend([self.progress[kind], self.status[kind]])
             tabs.append((
                 "Regime map" if kind == MAP else "Basins",

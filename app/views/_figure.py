@@ -51,9 +51,12 @@ def make_figure(name: str, title: str, x_label: str, y_label: str, **kw):
 
 
 #: Runs in the page: a figure title wider than its frame (a long diagram title in large
-#: type on a projector) is drawn smaller until it fits, never below 11 px; the size the
-#: server set stays the base, so a shorter text or a wider frame gets it back. Checked
-#: twice a second (text and frame sizes change without an event BokehJS exposes).
+#: type on a projector) is drawn smaller until it fits, never below 11 px (on a phone
+#: the diagram's and the strip's titles are still cut there: Bokeh 3.9.2 draws a title on
+#: one line). Only the drawing changes (a silent set: nothing goes back to the server);
+#: the size the server sets stays the base, so a shorter text or a wider frame gets it
+#: back. Checked twice a second
+#: (text and frame sizes change without an event BokehJS exposes).
 FIT_TITLES_JS = """
 if (!window.__ieFitTitles) {
   window.__ieFitTitles = true
@@ -62,17 +65,18 @@ if (!window.__ieFitTitles) {
   const px = (s) => parseFloat(typeof s === "string" ? s : (s && s.value) || "14")
   const fit = () => {
     for (const v of Bokeh.index.query((v) => v.model.constructor.__name__ === "Figure")) {
-      const title = v.model.title
-      if (!title || !title.text || v.el.getBoundingClientRect().width === 0) continue
-      const now = px(title.text_font_size)
-      if (fitted.get(title.id) !== now) base.set(title.id, now)
-      const size = base.get(title.id)
-      ctx.font = `${title.text_font_style} ${size}px ${title.text_font}`
-      const room = v.frame.bbox.width, need = ctx.measureText(title.text).width
-      const want = need > room ? Math.max(11, Math.floor(size * room / need)) : size
-      if (want !== now) {
-        fitted.set(title.id, want)
-        title.text_font_size = `${want}px`
+      const t = v.model.title
+      if (!t || !t.text || v.el.getBoundingClientRect().width === 0) continue
+      const now = px(t.text_font_size)
+      if (fitted.get(t.id) !== now) base.set(t.id, now)
+      const full = base.get(t.id)
+      ctx.font = `${t.text_font_style} ${full}px ${t.text_font}`
+      const need = ctx.measureText(t.text).width, room = v.frame.bbox.width
+      const size = need > room ? Math.max(11, Math.floor(full * room / need)) : full
+      if (size !== now) {
+        fitted.set(t.id, size)
+        t.setv({text_font_size: `${size}px`}, {silent: true})
+        v.invalidate_layout()
       }
     }
   }

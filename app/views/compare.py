@@ -10,7 +10,6 @@ it at once computes each panel once.
 from __future__ import annotations
 
 import numpy as np
-from bokeh.layouts import gridplot
 from bokeh.models import ColumnDataSource, Range1d
 
 from ..scenes import BY_KEY
@@ -60,10 +59,7 @@ class CompareView:
             figs.append(fig)
         for fig in figs:
             fig.toolbar_location = None
-        self.figures = figs
-        # one grid of five columns fills compare mode's plot area: Fig. 3 (a)-(e), then
-        # (f) and Fig. 7 (a)-(d)
-        self.root = gridplot(figs, ncols=5, sizing_mode="stretch_both", toolbar_location=None)
+        self.figures = figs            # in page order; compare mode's room lays them out
 
     def present(self, presenter: bool) -> None:
         for fig in self.figures:
