@@ -17,6 +17,7 @@ CSS = """
 #: Below this width (CSS px) the page is one scrolling column: the header and the bar of
 #: ω, r, c, g stay at the top (sticky) over views in two columns (one below 600 px).
 NARROW = 899
+WIDE = NARROW + 1
 #: The page fills the window (no page scroll) from 900 px wide: a fixed header and bar,
 #: one information line, and the active mode's plot area taking the rest.
 PAGE_CSS = f"""
@@ -30,11 +31,13 @@ PAGE_CSS = f"""
 TOP_CSS = f"""
 :host {{ flex: none !important; background: white; min-width: 0 !important; }}
 .ie-header {{ order: -1; }}
-:host(.ie-big) {{ flex-direction: row !important; align-items: center;
-                 border-bottom: 1px solid #ddd; background: #f6f8fb; }}
-:host(.ie-big) .ie-header {{ flex: 0 0 auto !important; width: auto !important;
-                            border: none; }}
-:host(.ie-big) .ie-bar {{ flex: 1 1 0% !important; width: auto !important; }}
+@media (min-width: {WIDE}px) {{
+  :host(.ie-big) {{ flex-direction: row !important; align-items: center;
+                   border-bottom: 1px solid #ddd; background: #f6f8fb; }}
+  :host(.ie-big) .ie-header {{ flex: 0 0 auto !important; width: auto !important;
+                              border: none; }}
+  :host(.ie-big) .ie-bar {{ flex: 1 1 0% !important; width: auto !important; }}
+}}
 @media (max-width: {NARROW}px) {{
   :host {{ position: sticky !important; top: 0; z-index: 50; box-shadow: 0 1px 4px #0003; }}
 }}
@@ -42,11 +45,12 @@ TOP_CSS = f"""
 HEADER_CSS = f"""
 :host {{ flex-wrap: wrap; align-items: center; border-bottom: 1px solid #ddd;
          background: #f6f8fb; min-width: 0 !important; padding: 2px 0; }}
-:host(.ie-big) {{ flex-wrap: nowrap; border: none; background: none; }}
-:host(.ie-big) .ie-pin, :host(.ie-big) .ie-png {{
-  display: none !important; }}
-:host(.ie-big) .ie-scene {{ width: 150px !important; }}
-:host(.ie-big) .ie-notes {{ margin-right: 12px !important; }}
+@media (min-width: {WIDE}px) {{
+  :host(.ie-big) {{ flex-wrap: nowrap; border: none; background: none; }}
+  :host(.ie-big) .ie-pin, :host(.ie-big) .ie-png {{ display: none !important; }}
+  :host(.ie-big) .ie-scene {{ width: 150px !important; }}
+  :host(.ie-big) .ie-notes {{ margin-right: 12px !important; }}
+}}
 """
 BAR_CSS = f"""
 :host {{ display: grid !important; align-items: center; min-width: 0 !important;
@@ -55,10 +59,12 @@ BAR_CSS = f"""
 @media (max-width: {NARROW}px) {{
   :host {{ grid-template-columns: repeat(2, auto minmax(0, 1fr)); }}
 }}
-:host(.ie-big) {{ grid-template-columns: repeat(4, auto); justify-content: end;
-                 padding-left: 16px; }}
-:host(.ie-big) .ie-bar-slider {{ display: none !important; }}
-:host(.ie-big) .ie-bar-box {{ width: 104px !important; }}
+@media (min-width: {WIDE}px) {{
+  :host(.ie-big) {{ grid-template-columns: repeat(4, auto); justify-content: end;
+                   padding-left: 16px; }}
+  :host(.ie-big) .ie-bar-slider {{ display: none !important; }}
+  :host(.ie-big) .ie-bar-box {{ width: 104px !important; }}
+}}
 """
 #: A bar item's number box: its label (the symbol) beside it, not above.
 BAR_ITEM_CSS = """
@@ -72,7 +78,7 @@ input { font-size: 16px; }
 INFO_CSS = f"""
 :host {{ position: relative; flex: none !important; height: 30px; align-items: center;
          flex-wrap: nowrap; overflow: visible; z-index: 40; }}
-:host(.ie-big) {{ height: 40px; }}
+@media (min-width: {WIDE}px) {{ :host(.ie-big) {{ height: 40px; }} }}
 .ie-caption {{ flex: 1 1 0% !important; min-width: 80px; }}
 .ie-badge, .ie-stability {{ flex: 0 1 auto !important; max-width: 25%; min-width: 0; }}
 .ie-diagram-status {{ flex: 0 1 auto !important; max-width: 17%; min-width: 0; }}
