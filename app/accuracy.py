@@ -95,7 +95,7 @@ def to_html(results: list[MethodResult], horizon: float = HORIZON) -> str:
         f"<td>{r.missed}/{r.extra}</td><td>{fmt(r.dt_max)}</td><td>{fmt(r.dv_rel)}</td>"
         f"<td>{html.escape(r.message)}</td></tr>" for r in results)
     return ("<table class='ie-accuracy'><tr><th>method</th><th>setting</th>"
-            "<th>run time</th><th>impacts</th><th>missed/extra</th><th>max |Δτ_I| (s)</th>"
-            "<th>max |Δẋ_I|/V</th><th></th></tr>" + rows + "</table>"
+            "<th>run time</th><th>impacts</th><th>missed/extra</th><th>max |Δτᵢ| (s)</th>"
+            "<th>max |Δẋᵢ|/V</th><th></th></tr>" + rows + "</table>"
             f"<small>Impacts in the first {horizon:g} s from τ = 0, matched by time, "
             "against the exact method; run time: median of the whole scene run.</small>")

@@ -12,7 +12,8 @@ A settings change is validated into a ``Run``; what it changes decides the work:
 Each job is an ``app.jobs.Job`` (latest request wins, work off the event loop, results
 back on it); each view gets the results it shows through its hooks (app.views.base).
 The diagram and its branch overlay (``app.session_diagram``), compare mode
-(``app.compare_mode``) and the research card (``app.research_panel``) own their jobs.
+(``app.compare_mode``) and research mode (``app.research_panel``) own their jobs; both
+are built when their mode is first shown (``mode``, a display setting like presenter).
 Bad settings show a message naming the fields and keep the last good scene; nothing
 raises into Panel (no traceback in the server log).
 """
@@ -34,7 +35,7 @@ from .research_panel import ResearchPanel
 from .session_diagram import SessionDiagram
 from .settings import BY_NAME, QUERY_NAMES, SWEEP_RANGES, Settings
 from .views import VIEWS
-from .views._figure import share_helpers
+from .views._figure import fit_titles, share_helpers
 
 log = logging.getLogger(__name__)
 
@@ -74,11 +75,15 @@ class Explorer(pn.viewable.Viewer):
                 doc.js_on_event("document_ready", view.ready)
         if doc is not None:
             repair_reconnect(doc)
+            fit_titles(doc)
         share_helpers([v.figure for v in self.views if v.figure is not None])
         self.downloads = Downloads(self)
+        rooms = {"compare": lambda: c.compare_room(
+                     self.compare.open(self.settings.presenter).figures),
+                 "research": lambda: self.research.room}
         self.controls = c = Controls(self.settings, self.views, on_scene=self.load_scene,
                                      on_accuracy=self._on_accuracy, downloads=self.downloads,
-                                     on_reset=self.reset)
+                                     on_reset=self.reset, rooms=rooms)
         self.widgets, self.badge, self.caption = c.widgets, c.badge, c.caption
         self.message_pane, self.diagram_status = c.message_pane, c.diagram_status
         pool = None if doc is None else _SCENE_POOL
@@ -101,15 +106,13 @@ class Explorer(pn.viewable.Viewer):
                                       pool=None if doc is None else _RESEARCH_POOL,
                                       current=lambda: (self._wanted, self.scene),
                                       pick=self.pick, downloads=self.downloads)
-        self.controls.add_research(self.research.card)
         self.compare = CompareMode(dispatch, pool)
-        c.compare_toggle.param.watch(lambda e: self.show_compare(e.new), "value")
         c.pin_toggle.param.watch(lambda e: self.pin(e.new), "value")
         self.settings.param.watch(self._on_settings, [n for n in QUERY_NAMES
                                                       if n not in state.DISPLAY_FIELDS])
         self.settings.param.watch(self._on_display, list(state.DISPLAY_FIELDS))
-        self._on_display()
         self._apply()
+        self._on_display()
         self.controls.show_scene(self._scene_key)
         if errors:
             self._message("Not applied from the link: " + "; ".join(errors))
@@ -154,21 +157,24 @@ class Explorer(pn.viewable.Viewer):
             if hasattr(view, "pin"):
                 view.pin(on)
 
-    def show_compare(self, visible: bool) -> None:
-        """Open (building it the first time) or close compare mode."""
-        if visible:
-            self.compare.open(self.settings.presenter)
-        if self.compare.view is not None:
-            self.controls.show_compare(self.compare.view.root, visible)
+    def show_mode(self, mode: str) -> None:
+        """Give the page's plot area to ``mode`` (explore, compare or research); compare
+        and research are built the first time they are shown."""
+        if mode == "research":
+            self.research.open()
+        self.controls.show_mode(mode)
 
     def _on_display(self, *events) -> None:
-        """Presenter mode on or off: type sizes and line widths of every view."""
+        """Presenter mode on or off (type sizes and line widths of every view), the mode
+        shown."""
+        presenter = self.settings.presenter
         with pn.io.hold(self._doc):
-            for view in self.views:
-                view.present(self.settings.presenter)
-            if events or self.settings.presenter:   # a projector: plots take the width
-                self.controls.sidebar_toggle.value = not self.settings.presenter
-            self.compare.present(self.settings.presenter)
+            if not events or any(e.name == "presenter" for e in events):
+                for view in self.views:
+                    view.present(presenter)
+                self.compare.present(presenter)
+                self.controls.present(presenter)
+            self.show_mode(self.settings.mode)
             if events:
                 self._write_url()
 

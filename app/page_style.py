@@ -1,69 +1,208 @@
 """The page's stylesheets (Panel ``stylesheets``, one per part of the layout) and the
 script of its PNG export. The layout that uses them is ``app.controls``.
+
+Each part's stylesheet lives in its own shadow root: a rule about a child (``.ie-bar``)
+belongs to the stylesheet of the layout holding that child.
 """
 
+#: Type of the readouts: at least 16 px (22 px in presenter mode, class ``ie-big``).
 CSS = """
-.ie-badge {font-size: 14px;}
+:host { font-size: 16px; }
+:host(.ie-big) { font-size: 22px; }
 .ie-badge b {color: #1f5fa8;}
-.ie-stability {font-size: 14px;}
 .ie-accuracy {border-collapse: collapse; width: 100%;}
 .ie-accuracy td, .ie-accuracy th {padding: 4px 10px; font-size: 15px; text-align: left;
                                   border-bottom: 1px solid #ddd; white-space: nowrap;}
 """
-#: The page fills the window on a landscape screen of at least 1000 x 560 CSS px (a
-#: projector at 1280 x 720 or 1920 x 1080): six cells, 3 x 2, no scrolling. Below that
-#: (tablets, zoomed laptops) the views take two columns (one below 640 px) of fixed
-#: height, the sidebar follows them, and the page scrolls down only.
-PAGE_CSS = """
-:host { width: 100%; }
-@media (max-width: 999px), (max-height: 559px) {
-  :host { flex-direction: column !important; height: auto !important; }
-}
+#: Below this width (CSS px) the page is one scrolling column: the header and the bar of
+#: ω, r, c, g stay at the top (sticky) over views in two columns (one below 600 px).
+NARROW = 899
+WIDE = NARROW + 1
+#: The page fills the window (no page scroll) from 900 px wide: a fixed header and bar,
+#: one information line, and the active mode's plot area taking the rest.
+PAGE_CSS = f"""
+:host {{ width: 100vw; height: 100vh !important; overflow: hidden; min-width: 0 !important; }}
+@media (max-width: {NARROW}px) {{
+  :host {{ height: auto !important; min-height: 100vh; overflow: visible; }}
+}}
 """
-SIDEBAR_CSS = """
-:host { height: 100vh; overflow-y: auto; overflow-x: hidden; flex-shrink: 0; }
-@media (max-width: 999px), (max-height: 559px) {
-  :host { height: auto; width: 100% !important; overflow-y: visible; flex: none !important;
-          order: 2; }
-}
+#: The bar (ω, r, c, g) comes first in the page, so that ω's box is the first Tab stop;
+#: the header is drawn above it.
+TOP_CSS = f"""
+:host {{ flex: none !important; background: white; min-width: 0 !important; }}
+.ie-header {{ order: -1; }}
+@media (min-width: {WIDE}px) {{
+  :host(.ie-big) {{ flex-direction: row !important; align-items: center;
+                   border-bottom: 1px solid #ddd; background: #f6f8fb; }}
+  :host(.ie-big) .ie-header {{ flex: 0 0 auto !important; width: auto !important;
+                              border: none; }}
+  :host(.ie-big) .ie-bar {{ flex: 1 1 0% !important; width: auto !important; }}
+}}
+@media (max-width: {NARROW}px) {{
+  :host {{ position: sticky !important; top: 0; z-index: 50; box-shadow: 0 1px 4px #0003; }}
+}}
 """
-MAIN_CSS = """
-:host { height: 100vh; min-width: 0; flex: 1 1 0%; }
-@media (max-width: 999px), (max-height: 559px) {
-  :host { height: auto !important; flex: none !important; }
-}
+HEADER_CSS = f"""
+:host {{ flex-wrap: wrap; align-items: center; border-bottom: 1px solid #ddd;
+         background: #f6f8fb; min-width: 0 !important; padding: 2px 0; }}
+@media (min-width: {WIDE}px) {{
+  :host(.ie-big) {{ flex-wrap: nowrap; border: none; background: none; }}
+  :host(.ie-big) .ie-pin, :host(.ie-big) .ie-png {{ display: none !important; }}
+  :host(.ie-big) .ie-scene {{ width: 150px !important; }}
+  :host(.ie-big) .ie-notes {{ margin-right: 12px !important; }}
+}}
 """
-GRID_CSS = """
-:host { display: grid !important; grid-template-columns: repeat(3, minmax(0, 1fr));
-        grid-template-rows: repeat(2, minmax(0, 1fr)); gap: 6px; flex: 1 1 0%;
-        min-height: 0; width: 100%; }
-@media (max-width: 999px), (max-height: 559px) {
-  :host { grid-template-columns: repeat(2, minmax(0, 1fr)); grid-auto-rows: 340px;
-          grid-template-rows: none; flex: none !important; height: auto !important; }
-}
-@media (max-width: 639px) { :host { grid-template-columns: minmax(0, 1fr); } }
+BAR_CSS = f"""
+:host {{ display: grid !important; align-items: center; min-width: 0 !important;
+        grid-template-columns: repeat(4, auto minmax(0, 1fr)); }}
+.ie-bar-slider {{ width: auto !important; min-width: 0; }}
+@media (max-width: {NARROW}px) {{
+  :host {{ grid-template-columns: repeat(2, auto minmax(0, 1fr)); }}
+}}
+@media (min-width: {WIDE}px) {{
+  :host(.ie-big) {{ grid-template-columns: repeat(4, auto); justify-content: end;
+                   padding-left: 16px; }}
+  :host(.ie-big) .ie-bar-slider {{ display: none !important; }}
+  :host(.ie-big) .ie-bar-box {{ width: 104px !important; }}
+}}
 """
-CELL_CSS = """
-:host { min-width: 0; min-height: 0; height: 100%; position: relative; }
+#: A bar item's number box: its label (the symbol) beside it, not above.
+BAR_ITEM_CSS = """
+.bk-input-group { flex-direction: row !important; align-items: center; }
+label { margin: 0 6px 0 0 !important; font-size: 18px; font-weight: bold; min-width: 0.9em; }
+input { font-size: 16px; }
 """
+#: The information line: caption (one line; the whole text on hover), chips for the
+#: motion, the stability and the diagram, and a banner over it when there is a message.
+#: Its height never changes, so results never move the figures.
+INFO_CSS = f"""
+:host {{ position: relative; flex: none !important; height: 30px; align-items: center;
+         flex-wrap: nowrap; overflow: visible; z-index: 40; }}
+@media (min-width: {WIDE}px) {{ :host(.ie-big) {{ height: 40px; }} }}
+.ie-caption {{ flex: 1 1 0% !important; min-width: 80px; }}
+.ie-badge, .ie-stability {{ flex: 0 1 auto !important; max-width: 25%; min-width: 0; }}
+.ie-diagram-status {{ flex: 0 1 auto !important; max-width: 17%; min-width: 0; }}
+.ie-message {{ position: absolute !important; left: 0; right: 0; top: 0; z-index: 45; }}
+@media (max-width: {NARROW}px) {{
+  :host {{ height: auto; flex-wrap: wrap; }}
+  .ie-badge, .ie-stability, .ie-diagram-status {{ max-width: 100%; }}
+}}
+"""
+#: A banner (bad link, work limit): one line over the information line; the whole
+#: message while the pointer is on it.
+MESSAGE_CSS = """
+:host { font-size: 16px; background: #fff3cd; color: #664d03; border: 1px solid #ffe69c;
+        border-radius: 4px; }
+:host > div { padding: 3px 10px; max-height: 30px; overflow: hidden; white-space: nowrap;
+              text-overflow: ellipsis; line-height: 24px; }
+:host(:hover) > div { max-height: none; white-space: normal; }
+"""
+STAGE_CSS = f"""
+:host {{ flex: 1 1 0% !important; min-height: 0; min-width: 0 !important; }}
+@media (max-width: {NARROW}px) {{ :host {{ flex: none !important; height: auto !important; }} }}
+"""
+#: Explore: the four scene views in a row over the diagram (with its Lyapunov strip),
+#: which gets three quarters of the width and the larger row; the animation beside it.
+#: Narrower: two columns (one below 600 px) of fixed height, the diagram across.
+EXPLORE_CSS = f"""
+:host {{ display: grid !important; gap: 4px; height: 100% !important; min-height: 0;
+        grid-template-columns: repeat(4, minmax(0, 1fr));
+        grid-template-rows: minmax(0, 36fr) minmax(0, 64fr);
+        grid-template-areas: "displacement phase impact_map poincare"
+                             "bifurcation bifurcation bifurcation animation"; }}
+:host(.ie-off) {{ display: none !important; }}
+.ie-cell {{ min-width: 0; min-height: 0; height: auto !important; width: auto !important; }}
+.ie-cell-displacement {{ grid-area: displacement; }}
+.ie-cell-phase {{ grid-area: phase; }}
+.ie-cell-impact_map {{ grid-area: impact_map; }}
+.ie-cell-poincare {{ grid-area: poincare; }}
+.ie-cell-bifurcation {{ grid-area: bifurcation; }}
+.ie-cell-animation {{ grid-area: animation; }}
+@media (max-width: {NARROW}px) {{
+  :host {{ height: auto !important; grid-template-columns: repeat(2, minmax(0, 1fr));
+          grid-template-rows: none; grid-auto-rows: 300px;
+          grid-template-areas: "displacement phase" "impact_map poincare"
+                               "bifurcation bifurcation" "bifurcation bifurcation"
+                               "animation animation"; }}
+}}
+@media (max-width: 599px) {{
+  :host {{ grid-template-columns: minmax(0, 1fr); grid-auto-rows: 280px;
+          grid-template-areas: "displacement" "phase" "impact_map" "poincare"
+                               "bifurcation" "bifurcation" "animation"; }}
+}}
+"""
+#: Compare: Fig. 3 (a)-(e) over (f) and Fig. 7 (a)-(d); two columns of fixed height on a
+#: tablet, one on a phone.
+COMPARE_CSS = f"""
+:host {{ display: grid !important; gap: 4px; height: 100% !important; min-height: 0;
+        grid-template-columns: repeat(5, minmax(0, 1fr));
+        grid-template-rows: repeat(2, minmax(0, 1fr)); }}
+.ie-cell {{ min-width: 0; min-height: 0; height: auto !important; width: auto !important; }}
+@media (max-width: {NARROW}px) {{
+  :host {{ height: auto !important; grid-template-columns: repeat(2, minmax(0, 1fr));
+          grid-template-rows: none; grid-auto-rows: 260px; }}
+}}
+@media (max-width: 599px) {{ :host {{ grid-template-columns: minmax(0, 1fr); }} }}
+"""
+#: Compare and research (a mode not shown has the class ``ie-off``): the plot area is theirs; what does not fit scrolls inside it.
+ROOM_CSS = f"""
+:host {{ height: 100% !important; min-height: 0; min-width: 0 !important; overflow: auto; }}
+:host(.ie-off) {{ display: none !important; }}
+@media (max-width: {NARROW}px) {{ :host {{ height: auto !important; overflow: visible; }} }}
+:host(.ie-research) {{ overflow: hidden; }}
+@media (max-width: {NARROW}px) {{
+  :host(.ie-research) {{ flex: none !important; height: 90vh !important; }}
+}}
+"""
+DRAWER_CSS = """
+:host { position: fixed !important; top: 0; left: 0; bottom: 0; z-index: 900;
+        background: white; overflow-y: auto; overflow-x: hidden;
+        box-shadow: 4px 0 16px #0004; padding: 4px 0; max-width: 100vw; }
+"""
+#: A layout that fills its parent's height (research mode's tabs and their contents).
+FILL_CSS = f"""
+:host {{ min-height: 0; min-width: 0 !important; }}
+@media (max-width: {NARROW}px) {{ :host {{ flex-wrap: wrap; }} }}
+"""
+#: A legend beside its figure: scrolls inside the plot area when it is taller.
+LEGEND_CSS = f"""
+:host {{ max-height: calc(100vh - 230px); overflow-y: auto; }}
+@media (max-width: {NARROW}px) {{ :host {{ max-height: 30vh; width: 100% !important; }} }}
+"""
+#: The page's title and the notes' icon (the title left out on narrow screens and in
+#: presenter mode, class ``ie-big`` on the header).
 NOTE_CSS = """
-details { font-size: 13px; color: #555; }
-summary { cursor: pointer; }
-details[open] div { position: absolute; z-index: 20; background: #fffbe8; margin: 2px 0;
+.ie-title { font-size: 18px; margin-right: 8px; white-space: nowrap; vertical-align: middle; }
+@media (max-width: 1099px) { .ie-title { display: none; } }
+:host(.ie-big) .ie-title { display: none; }
+details { font-size: 16px; color: #333; display: inline-block; vertical-align: middle; }
+summary { cursor: pointer; list-style: none; font-size: 20px; }
+details[open] div { position: fixed; z-index: 950; background: #fffbe8; margin: 2px 0;
                     padding: 6px 12px; border: 1px solid #e0c96b; border-radius: 4px;
-                    width: min(46em, 80vw); font-size: 15px; color: #222; }
+                    right: 8px; width: min(46em, 90vw); font-size: 16px; color: #222; }
 details div p { margin: 4px 0; }
+.ie-notes-label { font-size: 16px; }
+@media (max-width: 1499px) { .ie-notes-label { display: none; } }
 """
-#: The readout lines above the figures (badge, stability) keep one line's height whatever
+#: The readout lines (badge, stability, diagram status) keep one line's height whatever
 #: their text: a result arriving never moves the figures under the pointer. The whole
 #: text is the line's hover text.
 LINE_CSS = """
-:host { height: 20px; overflow: hidden; }
-.ie-line { white-space: nowrap; overflow: hidden; text-overflow: ellipsis; }
+:host { height: 24px; overflow: hidden; line-height: 24px; }
+:host(.ie-big) { height: 32px; line-height: 32px; }
+.ie-line, div { white-space: nowrap; overflow: hidden; text-overflow: ellipsis; }
 """
+#: The caption: one line; the pointer on it (or a tap) shows all of it over the figures.
 CAPTION_CSS = """
-:host { max-height: 4.6em; overflow-y: auto; }
-p { margin: 2px 0; }
+:host { height: 26px; position: relative; overflow: visible; font-size: 16px; }
+:host(.ie-big) { height: 34px; font-size: 22px; }
+:host > div { position: absolute; left: 0; right: 0; top: 0; background: white;
+              white-space: nowrap; overflow: hidden; text-overflow: ellipsis;
+              line-height: 26px; }
+:host(:hover) > div { white-space: normal; z-index: 60; box-shadow: 0 4px 12px #0003;
+                      padding: 0 6px; }
+p { margin: 0 !important; display: inline; }
+p + p { margin-left: 0.6em !important; }
 """
 MODAL_CSS = """
 :host { position: fixed !important; top: 6vh; left: 5vw; width: 90vw !important;

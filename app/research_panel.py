@@ -1,8 +1,8 @@
-"""The research card of the page: regime map and basins, built when first opened.
+"""Research mode's plot area: regime map and basins, built when first opened.
 
-Closed, the card is one line at the bottom of the page (no figure, no Bokeh models
-beyond the card itself), so the six main figures keep their place and the page stays
-light. Opening it builds both tabs' contents and computes the open tab's picture;
+Until research mode is first shown nothing of it exists in the page (no figure, no
+Bokeh model), so the page stays light. Opening it builds both tabs' contents and
+computes the open tab's picture;
 switching to the other tab computes that one if it is not there yet. The buttons
 recompute for the current settings; "Cancel" stops the computation (rows so far stay).
 One research job per session runs the work (``app.research``) off the event loop and
@@ -20,11 +20,11 @@ from . import boundaries, research
 
 from .controls import NamedHTML
 from .jobs import Job
+from .page_style import FILL_CSS, LEGEND_CSS
 
 log = logging.getLogger(__name__)
 
 MAP, BASINS = "map", "basins"
-TITLE = "Research: regime map and basins of attraction"
 
 
 class ResearchPanel:
@@ -44,9 +44,8 @@ class ResearchPanel:
         self._keys: dict = {}               # kind -> key of the request shown
         self._scene = None
         self._t0 = 0.0
-        self.card = pn.layout.Card(title=TITLE, collapsed=True, sizing_mode="stretch_width",
-                                   css_classes=["ie-research"])
-        self.card.param.watch(self._on_toggle, "collapsed")
+        self.room = pn.Column(sizing_mode="stretch_both", css_classes=["ie-research"],
+                              margin=0)
 
     @property
     def built(self) -> bool:
@@ -54,15 +53,16 @@ class ResearchPanel:
 
     # -- building -------------------------------------------------------------------------
 
-    def _on_toggle(self, event) -> None:
-        if event.new:
-            return
+    def open(self):
+        """Research mode is shown: build it the first time, compute the open tab's
+        picture unless it is there; returns the plot area."""
         if not self.built:
             self.build()
         self._open(self.tabs.active)
+        return self.room
 
     def build(self) -> None:
-        """Make both views and the card's contents (first opening only)."""
+        """Make both views and the tabs (first opening only)."""
         from .views.basins import BasinsView
         from .views.regime_map import RegimeMapView
         from .views._figure import share_helpers
@@ -72,6 +72,8 @@ class ResearchPanel:
         self.boundary_status = NamedHTML("", model_name="boundaries_status",
                                          css_classes=["ie-boundaries-status"])
         share_helpers([v.figure for v in self.views.values()])
+        for view in self.views.values():      # on a tablet or phone the room scrolls
+            view.figure.min_height = 360
         for view in self.views.values():
             view.connect(self._pick)
         self.status, self.progress, self.legend, self.buttons = {}, {}, {}, {}
@@ -101,25 +103,26 @@ class ResearchPanel:
             self.status[kind] = NamedHTML("", model_name=f"{view.key}_status",
                                           css_classes=[f"ie-{kind}-status"],
                                           sizing_mode="stretch_width")
-            self.legend[kind] = pn.pane.HTML(view.legend, width=260,
+            self.legend[kind] = pn.pane.HTML(view.legend, width=250, stylesheets=[LEGEND_CSS],
                                              css_classes=[f"ie-{kind}-legend"])
             for n in names:             # (in the sidebar they would stretch; here not)
                 self._widgets[n].param.update(sizing_mode="fixed", width=150)
             controls = pn.Row(*(self._widgets[n] for n in names), button, stop, save,
-                              sizing_mode="stretch_width")
+                              sizing_mode="stretch_width", stylesheets=[FILL_CSS])
+            controls.extend([self.progress[kind], self.status[kind]])
             tabs.append((
                 "Regime map" if kind == MAP else "Basins",
-                pn.Column(controls, pn.Row(self.progress[kind], self.status[kind],
-                                           sizing_mode="stretch_width"),
-                          pn.Row(pn.pane.Bokeh(view.figure, sizing_mode="stretch_width"),
+                pn.Column(controls,
+                          pn.Row(pn.pane.Bokeh(view.figure, sizing_mode="stretch_both"),
                                  pn.Column(self.legend[kind], self.boundary_status,
                                            curves_csv, width=270)
                                  if kind == MAP else self.legend[kind],
-                                 sizing_mode="stretch_width"),
-                          sizing_mode="stretch_width")))
-        self.tabs = pn.Tabs(*tabs, dynamic=True, sizing_mode="stretch_width")
+                                 sizing_mode="stretch_both", stylesheets=[FILL_CSS]),
+                          sizing_mode="stretch_both", stylesheets=[FILL_CSS])))
+        self.tabs = pn.Tabs(*tabs, dynamic=True, sizing_mode="stretch_both",
+                            stylesheets=[FILL_CSS])
         self.tabs.param.watch(lambda event: self._open(event.new), "active")
-        self.card.objects = [self.tabs]
+        self.room.objects = [self.tabs]
         if self._scene is not None:
             self.show_scene(self._scene)
 

@@ -56,7 +56,9 @@ AXIS_LABELS = {"omega": "driving frequency ω (rad/s)", "r": "restitution r",
                "c": "damping c", "g": "endstop gap g", "m": "mass m", "k": "stiffness k"}
 
 SCENE, SECTION, DIAGRAM = "scene", "section", "diagram"
-#: Group of the research settings: shown in the research card, not in the sidebar.
+#: The page's modes (URL ``mode``), one plot area each (app.controls).
+MODES = ("explore", "compare", "research")
+#: Group of the research settings: shown in research mode, not in the settings drawer.
 RESEARCH = "Research"
 #: Group of the settings shown above the diagram (not in the sidebar): its overlays.
 ON_DIAGRAM = "On the diagram"
@@ -69,8 +71,8 @@ class Setting:
     default: object
     doc: str
     affects: frozenset            # results that depend on it (SCENE, SECTION, DIAGRAM)
-    group: str                    # sidebar card
-    widget: str = "input"         # "slider" | "input" | "select" | "checkbox" | "toggle"
+    group: str                    # the settings drawer's card
+    widget: str = "input"         # "slider" | "input" | "select" | "checkbox" | "toggle" | "radio"
     kind: str = "number"          # "number" | "integer" | "choice" | "flag" (on/off)
     lo: float | None = None       # valid range; None: unbounded
     hi: float | None = None
@@ -214,6 +216,10 @@ SETTINGS: tuple[Setting, ...] = (
     Setting("basins_n", "basins cells per side", 100,
             f"Grid of the basins picture: n × n starts (2 … {BASINS_N_MAX}).", frozenset(),
             RESEARCH, kind="integer", lo=2, hi=BASINS_N_MAX, half=True),
+    Setting("mode", "mode", "explore",
+            "What the page shows: explore (the scene's views and the diagram), compare "
+            "(the paper's Fig. 3 and Fig. 7 side by side) or research (regime map, basins).",
+            frozenset(), "header", widget="radio", kind="choice", choices=MODES, display=True),
     Setting("presenter", "Presenter", False,
             "Large type and thick lines for a projector (read from the back of the room).",
             frozenset(), "header", widget="toggle", kind="flag", display=True),

@@ -3,9 +3,10 @@
     panel serve app/app.py --port 5006 &
     .venv/bin/python scripts/screenshots.py http://127.0.0.1:5006/app
 
-Takes the page at 1280 x 720 and 1920 x 1080 (projectors), 768 x 1024 (tablet, whole
-page), presenter mode at 1280 x 720, and the Fig. 4 animation while the mass chatters
-on the wall. Each PNG is reduced to a 256-colour palette to keep the repository small.
+Takes each mode (explore, presenter, compare, research) at 1280 x 720 (a projector),
+1920 x 1080 (a monitor), 768 x 1024 (a tablet) and 390 x 844 (a phone), as the window
+shows it, and the Fig. 4 animation while the mass chatters on the wall. Each PNG is
+reduced to a 256-colour palette to keep the repository small.
 """
 import sys
 from pathlib import Path
@@ -17,6 +18,17 @@ OUT = Path(__file__).resolve().parents[1] / "docs" / "screenshots"
 CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
                  "--no-first-run", "--disable-background-networking",
                  "--disable-component-update", "--disable-sync"]
+SIZES = {"projector": (1280, 720), "monitor": (1920, 1080), "tablet": (768, 1024),
+         "phone": (390, 844)}
+#: (name, link, what must be drawn before the picture is taken)
+MODES = (("explore", "?scene=fig2", None), ("presenter", "?scene=fig4&presenter=1", None),
+         ("compare", "?mode=compare", "compare_fig7d"),
+         ("research", "?omega=2.62&mode=research", "regime_map"))
+FILLED = """(name) => { const m = Bokeh.documents[0].get_model_by_name(name);
+  if (!m) return false; const r = m.renderers ? m.renderers[0] : m;
+  const d = r.data_source.data; const k = Object.keys(d)[0];
+  return d[k].length > 0 && (name !== 'regime_map' ||
+    Bokeh.documents[0].get_model_by_name('regime_map_figure').title.text.includes('complete')); }"""
 READY = """() => window.Bokeh && Bokeh.documents.length &&
   Bokeh.documents[0].get_model_by_name('bifurcation_figure').title.text.includes('complete') &&
   Bokeh.documents[0].get_model_by_name('displacement').data_source.data.t.length > 0"""
@@ -38,6 +50,7 @@ def shoot(page, url, name, size, full_page=False, before=None):
     page.wait_for_timeout(800)
     if before:
         before(page)
+    page.wait_for_timeout(1200)              # titles fitted (app.views._figure)
     path = OUT / f"{name}.png"
     page.screenshot(path=str(path), full_page=full_page)
     Image.open(path).convert("RGB").quantize(256).save(path, optimize=True)
@@ -58,10 +71,11 @@ def main(url: str) -> None:
         browser = p.chromium.launch(executable_path="/usr/bin/chromium", headless=True,
                                     args=CHROMIUM_ARGS)
         page = browser.new_page()
-        shoot(page, url + "?scene=fig2", "projector-1280x720", (1280, 720))
-        shoot(page, url + "?scene=fig6", "projector-1920x1080", (1920, 1080))
-        shoot(page, url + "?scene=fig5", "tablet-768x1024", (768, 1024), full_page=True)
-        shoot(page, url + "?scene=fig2&presenter=1", "presenter-1280x720", (1280, 720))
+        for mode, query, drawn in MODES:
+            for where, size in SIZES.items():
+                wait = None if drawn is None else (
+                    lambda p, n=drawn: p.wait_for_function(FILLED, arg=n, timeout=120_000))
+                shoot(page, url + query, f"{mode}-{where}", size, before=wait)
         shoot(page, url + "?scene=fig4", "animation-fig4-chatter", (1280, 720),
               before=chatter)
         browser.close()

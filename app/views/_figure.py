@@ -4,19 +4,24 @@ from __future__ import annotations
 import weakref
 
 from bokeh.models import (AllIndices, AllLabels, BasicTicker, BasicTickFormatter, DataRange1d,
-                          GlyphRenderer, LinearScale, UnionRenderers)
+                          GlyphRenderer, Grid, LinearScale, PanTool, ResetTool, Selection,
+                          UnionRenderers, WheelZoomTool)
 from bokeh.plotting import figure
 
-#: Tool sets by kind of view (each tool is a model in every page; box zoom is four).
+#: Tool sets by kind of view (each tool is a model, box zoom four; ``share_helpers``
+#: gives the page one of each pan, wheel zoom and reset tool). Box zoom only where a
+#: region is worth picking out: the diagram.
 TIME_SERIES_TOOLS = "xpan,xwheel_zoom,reset"
 CURVE_TOOLS = "pan,wheel_zoom,reset"
-POINTS_TOOLS = "pan,wheel_zoom,box_zoom,reset"
+POINTS_TOOLS = CURVE_TOOLS
+DIAGRAM_TOOLS = "pan,wheel_zoom,box_zoom,reset,save"
 LINE = "#1f5fa8"
 IMPACT = "#d1495b"
 WALL = "#444444"
 STICK = "#f2b134"
 
-#: (tick labels, axis labels, title) font sizes, normal and presenter mode.
+#: (tick labels, axis labels, title) font sizes, normal and presenter mode (at least
+#: 12 px and 18 px: the back row of a classroom reads the ticks).
 FONTS = {False: ("12px", "13px", "14px"), True: ("18px", "20px", "22px")}
 #: Presenter mode multiplies line widths and marker sizes by these.
 LINE_SCALE, SIZE_SCALE = 2.0, 1.6
@@ -26,18 +31,66 @@ _BASE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 def make_figure(name: str, title: str, x_label: str, y_label: str, **kw):
-    """A figure that fills its cell of the page grid (the page sizes the cells)."""
+    """A figure that fills its cell of the page grid (the page sizes the cells). Its
+    toolbar sits inside the frame and shows while the pointer is on the figure, so it
+    takes no room from the data."""
     kw.pop("height", None)
     fig = figure(name=name, title=title, x_axis_label=x_label, y_axis_label=y_label,
                  sizing_mode="stretch_both", min_width=120, min_height=80,
                  tools=kw.pop("tools", POINTS_TOOLS),
-                 toolbar_location=kw.pop("toolbar_location", "right"),
+                 toolbar_location=kw.pop("toolbar_location", "right"), toolbar_inner=True,
                  output_backend="canvas", **kw)
     for axis in (fig.xaxis, fig.yaxis):
         axis.axis_label_text_font_style = "normal"
     fig.toolbar.logo = None
+    fig.toolbar.autohide = True
+    # horizontal grid lines only: the vertical ones are a model each and read little
+    fig.center = [c for c in fig.center if not (isinstance(c, Grid) and c.dimension == 0)]
     style(fig, presenter=False)
     return fig
+
+
+#: Runs in the page: a figure title wider than its frame (a long diagram title in large
+#: type on a projector) is drawn smaller until it fits, never below 11 px (on a phone
+#: the diagram's and the strip's titles are still cut there: Bokeh 3.9.2 draws a title on
+#: one line). Only the drawing changes (a silent set: nothing goes back to the server);
+#: the size the server sets stays the base, so a shorter text or a wider frame gets it
+#: back. Checked twice a second
+#: (text and frame sizes change without an event BokehJS exposes).
+FIT_TITLES_JS = """
+if (!window.__ieFitTitles) {
+  window.__ieFitTitles = true
+  const base = new Map(), fitted = new Map()
+  const ctx = document.createElement("canvas").getContext("2d")
+  const px = (s) => parseFloat(typeof s === "string" ? s : (s && s.value) || "14")
+  const fit = () => {
+    for (const v of Bokeh.index.query((v) => v.model.constructor.__name__ === "Figure")) {
+      const t = v.model.title
+      if (!t || !t.text || v.el.getBoundingClientRect().width === 0) continue
+      const now = px(t.text_font_size)
+      if (fitted.get(t.id) !== now) base.set(t.id, now)
+      const full = base.get(t.id)
+      ctx.font = `${t.text_font_style} ${full}px ${t.text_font}`
+      const need = ctx.measureText(t.text).width, room = v.frame.bbox.width
+      const size = need > room ? Math.max(11, Math.floor(full * room / need)) : full
+      if (size !== now) {
+        fitted.set(t.id, size)
+        t.setv({text_font_size: `${size}px`}, {silent: true})
+        v.invalidate_layout()
+      }
+    }
+  }
+  setInterval(fit, 500)
+  fit()
+}
+"""
+
+
+def fit_titles(doc) -> None:
+    """Install ``FIT_TITLES_JS`` in the page of ``doc`` when it is ready."""
+    from bokeh.models import CustomJS
+
+    doc.js_on_event("document_ready", CustomJS(code=FIT_TITLES_JS))
 
 
 def style(fig, presenter: bool) -> None:
@@ -97,11 +150,15 @@ def share_helpers(figures) -> None:
     labels, the selection policy, the "all rows" filter), and every renderer a glyph for
     non-selected and muted rows that no view uses (no selection tools, no legend).
     Share one instance of each among the session's figures and drop the unused glyphs
-    (about 50 models of a page). Models cannot be shared between documents, so this
-    runs once per session."""
+    (about 50 models of a page). The same goes for the sources' selection (no view
+    selects: no tap or box-select tool) and for the pan, wheel zoom and reset tools
+    (BokehJS makes a tool's view per plot; a shared tool only shares its on/off state).
+    Models cannot be shared between documents, so this runs once per session."""
     ticker, formatter, labels = BasicTicker(), BasicTickFormatter(), AllLabels()
-    policy, rows, scale = UnionRenderers(), AllIndices(), LinearScale()
+    policy, rows, scale, selection = UnionRenderers(), AllIndices(), LinearScale(), Selection()
+    tools: dict = {}
     for fig in figures:
+        fig.toolbar.tools = [_shared_tool(tools, t) for t in fig.toolbar.tools]
         # BokehJS clones a figure's scale models before setting their ranges
         if type(fig.x_scale) is LinearScale and type(fig.y_scale) is LinearScale:
             fig.x_scale = fig.y_scale = scale
@@ -118,4 +175,14 @@ def share_helpers(figures) -> None:
             r.nonselection_glyph = None
             r.muted_glyph = None
             r.data_source.selection_policy = policy
+            # (``selected`` is read-only once built; set_from_json is how BokehJS sets it)
+            r.data_source.set_from_json("selected", selection)
             r.view.filter = rows
+
+
+def _shared_tool(shared: dict, tool):
+    """One instance of each stateless navigation tool (by type and dimensions)."""
+    if type(tool) not in (PanTool, WheelZoomTool, ResetTool):
+        return tool
+    key = (type(tool), getattr(tool, "dimensions", None))
+    return shared.setdefault(key, tool)

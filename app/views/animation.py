@@ -142,7 +142,7 @@ else if (action === "play") {
     st.playing = false; if (st.raf != null) cancelAnimationFrame(st.raf); st.raf = null;
     play.label = "▶ Play";
   } else {
-    st.playing = true; st.last = null; play.label = "⏸ Pause";
+    st.playing = true; st.last = null; play.label = "Pause";
     st.raf = requestAnimationFrame(frame);
   }
 } else if (action === "step") {

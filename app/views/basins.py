@@ -11,7 +11,7 @@ from bokeh.models import ColumnDataSource, LinearColorMapper, Range1d, Span
 from ..research import BASIN_COLOURS, UNDECIDED, BasinsRequest, attractor_text
 from ._figure import WALL, make_figure
 from .base import View
-from .regime_map import HEIGHT, PENDING, cell_value, legend_html
+from .regime_map import PENDING, cell_value, legend_html
 
 #: Image values: 0 undecided, 1 + attractor index (at most 64 attractors, colours cycled).
 PALETTE = (UNDECIDED,) + tuple(BASIN_COLOURS[i % len(BASIN_COLOURS)] for i in range(64))
@@ -35,10 +35,8 @@ class BasinsView(View):
         self._end = ""
         self.figure = make_figure("basins_figure", "Basins of attraction",
                                   "initial position x₀", "initial velocity v₀",
-                                  x_range=Range1d(0.0, 1.0), y_range=Range1d(-1.0, 1.0))
-        # below the grid, in a card: the card's width and a height of its own (a
-        # stretch_both figure would stretch every layout around it, with a warning)
-        self.figure.update(sizing_mode="stretch_width", height=HEIGHT)
+                                  x_range=Range1d(0.0, 1.0), y_range=Range1d(-1.0, 1.0),
+                                  height=420)
         mapper = LinearColorMapper(palette=list(PALETTE), low=-0.5, high=len(PALETTE) - 0.5,
                                    nan_color=PENDING)
         self.figure.image(image="image", x="x", y="y", dw="dw", dh="dh", source=self.source,

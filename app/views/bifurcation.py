@@ -15,7 +15,7 @@ from ..compute import last
 from ..diagram import COLUMNS
 from ..settings import AXIS_LABELS, SYMBOLS
 from ..state import Run
-from ._figure import IMPACT, POINTS_TOOLS, WALL, make_figure
+from ._figure import DIAGRAM_TOOLS, IMPACT, WALL, make_figure
 from .base import View
 
 #: Impacts of the current scene drawn on the marker.
@@ -51,9 +51,9 @@ class BifurcationView(View):
         self._pick = None
         self.title = "Bifurcation diagram"
         self.figure = make_figure("bifurcation_figure", "Bifurcation diagram",
-                                  AXIS_LABELS["omega"], "impact velocity ẋ(τ_I−)",
+                                  AXIS_LABELS["omega"], "impact velocity ẋ(τᵢ−)",
                                   x_range=Range1d(0.1, 5.0), height=340,
-                                  tools=POINTS_TOOLS + ",save")
+                                  tools=DIAGRAM_TOOLS)
         self._common = dict(x="omega", y="v", size=2, alpha=0.55)
         self.renderers = [self.figure.scatter(source=self.source, color=WALL,
                                               name="bifurcation", **self._common)]

@@ -10,7 +10,6 @@ it at once computes each panel once.
 from __future__ import annotations
 
 import numpy as np
-from bokeh.layouts import column, gridplot
 from bokeh.models import ColumnDataSource, Range1d
 
 from ..scenes import BY_KEY
@@ -23,7 +22,6 @@ SECTIONS = tuple(f"fig7{c}" for c in "abcd")
 #: panels in tests/app/test_explorer.py).
 V_RANGE = (-5.6, 0.2)
 SECTION_X, SECTION_V = (-0.05, 1.05), (-1.2, 1.6)
-PANEL_HEIGHT = 190
 
 
 def _panel_title(key: str) -> str:
@@ -45,7 +43,7 @@ class CompareView:
         figs = []
         for key in DIAGRAMS:
             src = ColumnDataSource({"omega": [], "v": []})
-            fig = make_figure(f"compare_{key}", _panel_title(key), "ω", "ẋ(τ_I−)",
+            fig = make_figure(f"compare_{key}", _panel_title(key), "ω", "ẋ(τᵢ−)",
                               x_range=omega, y_range=v, tools="")
             fig.scatter("omega", "v", source=src, size=1.5, color=WALL, alpha=0.6)
             self.diagrams[key] = (src, fig)
@@ -61,11 +59,7 @@ class CompareView:
             figs.append(fig)
         for fig in figs:
             fig.toolbar_location = None
-            fig.min_height = PANEL_HEIGHT
-        self.figures = figs
-        grid = dict(sizing_mode="stretch_width", height=PANEL_HEIGHT, toolbar_location=None)
-        self.root = column(gridplot(figs[:6], ncols=3, **grid),
-                           gridplot(figs[6:], ncols=4, **grid), sizing_mode="stretch_width")
+        self.figures = figs            # in page order; compare mode's room lays them out
 
     def present(self, presenter: bool) -> None:
         for fig in self.figures:

@@ -1,4 +1,4 @@
-"""View 3: impact map, impact phase τ_I mod T against the velocity before impact."""
+"""View 3: impact map, impact phase τᵢ mod T against the velocity before impact."""
 from __future__ import annotations
 
 from bokeh.models import ColumnDataSource, HoverTool, Range1d
@@ -17,12 +17,12 @@ class ImpactMapView(View):
         self.source = ColumnDataSource({"phase": [], "v": [], "t": []})
         self.pinned = None        # the overlay's source, made on the first pin
         self.figure = make_figure("impact_map_figure", "Impact map",
-                                  "impact phase τ_I mod T (s)", "impact velocity ẋ(τ_I−)",
+                                  "impact phase τᵢ mod T (s)", "impact velocity ẋ(τᵢ−)",
                                   x_range=Range1d(0.0, 3.14159), y_range=Range1d(-1.0, 0.0))
         dots = self.figure.scatter("phase", "v", source=self.source, size=5, color=IMPACT,
                                    alpha=0.8, name="impact_map")
         self.figure.add_tools(HoverTool(renderers=[dots], tooltips=[
-            ("τ_I", "@t{0.000} s"), ("phase", "@phase{0.0000} s"),
+            ("τᵢ", "@t{0.000} s"), ("phase", "@phase{0.0000} s"),
             ("impact velocity", "@v{0.0000}")]))
 
     def pin(self, on: bool) -> None:

@@ -63,7 +63,7 @@ def strip_columns(values: np.ndarray, lam: np.ndarray, sweep: np.ndarray,
 
 
 #: Height (px) of the strip under the diagram, on screen and in presenter mode.
-STRIP_HEIGHT = {False: 110, True: 140}
+STRIP_HEIGHT = {False: 110, True: 120}
 
 
 class LyapunovView(View):

@@ -15,8 +15,6 @@ from ._figure import make_figure
 from .base import View
 
 PENDING = "rgba(0, 0, 0, 0)"
-#: Height (px) of a research figure (its card has no fixed height to fill).
-HEIGHT = 420
 
 
 def cell_value(x: float, values: np.ndarray) -> float:
@@ -57,10 +55,7 @@ class RegimeMapView(View):
         lo_y, hi_y = SWEEP_RANGES["r"]
         self.figure = make_figure("regime_map_figure", "Regime map", AXIS_LABELS["omega"],
                                   AXIS_LABELS["r"], x_range=Range1d(lo_x, hi_x),
-                                  y_range=Range1d(lo_y, hi_y))
-        # below the grid, in a card: the card's width and a height of its own (a
-        # stretch_both figure would stretch every layout around it, with a warning)
-        self.figure.update(sizing_mode="stretch_width", height=HEIGHT)
+                                  y_range=Range1d(lo_y, hi_y), height=420)
         mapper = LinearColorMapper(palette=list(PALETTE), low=-0.5, high=len(PALETTE) - 0.5,
                                    nan_color=PENDING)
         self.figure.image(image="image", x="x", y="y", dw="dw", dh="dh", source=self.source,

@@ -330,7 +330,7 @@ def test_compare_mode_shows_fig3_and_fig7_on_shared_fixed_axes(make_explorer):
     from app.views import compare
     e = make_explorer()
     assert e.compare.view is None
-    e.controls.compare_toggle.value = True
+    e.settings.mode = "compare"
     for job in e.compare.jobs:
         assert job.done.wait(120), job.name
     diagrams = [e.compare.view.diagrams[k] for k in compare.DIAGRAMS]
@@ -350,7 +350,7 @@ def test_compare_mode_shows_fig3_and_fig7_on_shared_fixed_axes(make_explorer):
         assert np.array_equal(src.data["x"], ref["x"]) and len(ref["x"]) > 50
         assert compare.SECTION_X[0] <= min(ref["x"]) and max(ref["x"]) <= compare.SECTION_X[1]
         assert compare.SECTION_V[0] <= min(ref["v"]) and max(ref["v"]) <= compare.SECTION_V[1]
-    e.controls.compare_toggle.value = False
+    e.settings.mode = "explore"
 
 
 def test_pin_keeps_the_maps_as_an_overlay(make_explorer):

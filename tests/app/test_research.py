@@ -24,8 +24,8 @@ def tap(view, x, y):
 
 def test_research_card_is_built_only_when_opened(make_explorer):
     e = make_explorer()
-    assert not e.research.built and len(e.research.card.objects) == 0
-    e.research.card.collapsed = False           # opening computes the open tab (the map)
+    assert not e.research.built and len(e.research.room.objects) == 0
+    e.settings.mode = "research"                # opening computes the open tab (the map)
     assert e.research.built
     assert e.research.job.done.wait(120)
     assert e.research.status[MAP].object.startswith("complete")

@@ -2,7 +2,7 @@
 tapping the diagram. Helpers come from test_app_browser (same server fixture)."""
 import time
 
-from test_app_browser import JS, open_app, query, text
+from test_app_browser import JS, open_app, open_settings, query, text
 
 #: Page position (CSS px) of data point (x, y) of a figure: the plot's view maps data to
 #: canvas pixels; the canvas element's box places them on the page.
@@ -32,6 +32,7 @@ def diagram_ready(page, what: str) -> None:
 
 def test_switching_bif_param_to_r_redraws_with_marker_at_r(page, server):
     open_app(page, server, "?r=0.7&bif_n=60")
+    open_settings(page)
     page.get_by_text("Bifurcation diagram range", exact=True).click()
     page.locator(".ie-w-bif_param select").first.select_option("r")
     page.wait_for_function("() => ie.title('bifurcation_figure').includes('diagram in r')",

@@ -1,5 +1,5 @@
-"""The research card in headless Chromium: the regime map and the basins fill when their
-tab opens, and a tap on each changes the scene. Screenshots go to test-results/."""
+"""Research mode in headless Chromium: the regime map and the basins fill when their tab
+opens, and a tap on each changes the scene. Screenshots go to test-results/."""
 import time
 from pathlib import Path
 
@@ -50,7 +50,7 @@ def disp_sum(page) -> float:
 def test_regime_map_and_basins_fill_and_taps_change_the_scene(page, server):
     open_app(page, server, "?omega=2.62&r=0.8")
     assert page.evaluate("Bokeh.documents[0].get_model_by_name('regime_map_figure')") is None
-    page.get_by_text("Research: regime map and basins of attraction").click()
+    page.locator(".ie-w-mode button", has_text="Research").click()
     page.wait_for_function(FILLED, arg="regime_map", timeout=60_000)
     status = wait_complete(page, "ie-map-status")
     assert status.startswith("complete: 100 rows"), status
