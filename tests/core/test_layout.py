@@ -13,12 +13,15 @@ ROOT = Path(impactlib.__file__).parent
 
 #: what each part may import from the package (besides itself)
 ALLOWED = {
+    "_version": set(),
+    "io": {"_version"},
+    "progress": set(),
     "kernels": {"model"},
     "model": set(),
-    "simulate": {"kernels", "model"},
+    "simulate": {"kernels", "model", "io"},
     "parallel": set(),
-    "analysis": {"kernels", "model", "simulate", "parallel"},
-    "sweeps": {"kernels", "model", "simulate", "parallel", "analysis"},
+    "analysis": {"kernels", "model", "simulate", "parallel", "progress", "io"},
+    "sweeps": {"kernels", "model", "simulate", "parallel", "progress", "analysis", "io"},
     "verify": {"model", "simulate"},
 }
 #: deferred imports allowed: the accuracy report needs the optional extra "report"
