@@ -26,7 +26,7 @@ import impactlib as il
 
 from .branches import _follow, on_branch
 from .settings import SWEEP_RANGES
-from .stability import settled_orbit
+from .stability import exact_run, settled_orbit
 from .state import Run
 
 log = logging.getLogger(__name__)
@@ -83,7 +83,7 @@ def branch_events(req: BoundaryRequest, live, deadline) -> list:
         if not live() or time.perf_counter() > deadline:
             break
         p = run.params.replace(**{name: float(w)})
-        orb, _ = settled_orbit(p, run.x0, run.v0, run.t_end, run.t_record)
+        orb = settled_orbit(exact_run((p, run.x0, run.v0, run.t_end, run.t_record), None))
         if (orb is None or orb.sticks or not 0 < orb.impacts < math.inf
                 or on_branch(found, orb, name, float(w))):
             continue

@@ -36,6 +36,8 @@ def text(value) -> str:
         return str(bool(value))
     if isinstance(value, (np.floating, np.integer)):
         return repr(value.item())
+    if isinstance(value, int):
+        return repr(int(value))         # an IntEnum (RunStatus) by its number
     return repr(value)
 
 
