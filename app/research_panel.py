@@ -98,7 +98,7 @@ class ResearchPanel:
                 callback=lambda v=view: getattr(self._downloads, f"{v.key}_csv")(v),
                 filename=f"{view.key}.csv", label="CSV", width=70,
                 css_classes=[f"ie-{kind}-csv"])
-            self.progress[kind] = pn.indicators.Progress(value=0, max=100, width=160,
+            self.progress[kind] = pn.indicators.Progress(value=0, max=100, width=120,
                                                          height=14, margin=(14, 10))
             self.status[kind] = NamedHTML("", model_name=f"{view.key}_status",
                                           css_classes=[f"ie-{kind}-status"],
@@ -106,7 +106,7 @@ class ResearchPanel:
             self.legend[kind] = pn.pane.HTML(view.legend, width=250, stylesheets=[LEGEND_CSS],
                                              css_classes=[f"ie-{kind}-legend"])
             for n in names:             # (in the sidebar they would stretch; here not)
-                self._widgets[n].param.update(sizing_mode="fixed", width=150)
+                self._widgets[n].param.update(sizing_mode="fixed", width=120)
             controls = pn.Row(*(self._widgets[n] for n in names), button, stop, save,
                               sizing_mode="stretch_width", stylesheets=[FILL_CSS])
             controls.extend([self.progress[kind], self.status[kind]])

@@ -135,12 +135,13 @@ def strip_title(lam: np.ndarray, kind: np.ndarray, classified: bool,
     n = lam.size
     sticks = int(np.count_nonzero(lam == -np.inf))
     undefined = int(np.count_nonzero(np.isnan(lam)))
-    edge = f"{sticks} stick (−∞, ▼ at the bottom) · {undefined} undefined (×)"
+    # short enough for the strip's frame on a tablet
+    edge = f"{sticks} stick (−∞ ▼) · {undefined} undefined (×)"
     if classified:
         counts = {k: int(np.count_nonzero(kind == k))
                   for k in ("chaotic", "unbounded", "undetermined")}
-        return (f"Largest Lyapunov exponent λ₁: {counts['chaotic']} of {n} values chaotic "
-                f"(as classify: λ₁ > 2× its error) · {counts['unbounded']} unbounded · "
-                f"{counts['undetermined']} undetermined · {edge}")
+        return (f"λ₁: {counts['chaotic']} of {n} values chaotic (classify) · "
+                f"{counts['unbounded']} unbounded · {counts['undetermined']} undetermined · "
+                f"{edge}")
     positive = int(np.count_nonzero(lam > 0))
-    return f"Largest Lyapunov exponent λ₁: {positive} of {n} values > 0 ({note}) · {edge}"
+    return f"λ₁: {positive} of {n} values > 0 ({note}) · {edge}"

@@ -17,7 +17,7 @@ HOLDS = """(names) => names.every((name) => {
 
 def test_boundary_renderers_fill_over_the_regime_map(page, server):
     open_app(page, server, "?omega=2.62&r=0.8&boundaries=1")
-    page.get_by_text("Research: regime map and basins of attraction").click()
+    page.locator(".ie-w-mode button", has_text="Research").click()
     page.wait_for_function(FILLED, arg="regime_map", timeout=120_000)
     wait_complete(page, "ie-map-status", timeout=120.0)
     page.wait_for_function(HOLDS, arg=["boundary_pd", "boundary_sn", "boundary_grazing"],

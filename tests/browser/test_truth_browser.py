@@ -4,7 +4,7 @@ the link and the history hold the page's state; the caption names what is on scr
 import time
 
 from playwright.sync_api import expect
-from test_app_browser import open_app, query, text
+from test_app_browser import open_app, open_settings, query, text
 
 MARKER = "() => ie.model('bifurcation_marker').location"
 
@@ -67,6 +67,7 @@ def test_typed_values_are_applied_or_refused_with_a_message(page, server):
 
 def test_range_boxes_hold_numbers_after_a_switch_and_from_a_link(page, server):
     open_app(page, server, "?bif_param=r&bif_n=40")
+    open_settings(page)
     page.get_by_text("Bifurcation diagram range", exact=True).click()
     expect(box(page, "bif_min")).to_have_value("0", timeout=10_000)
     expect(box(page, "bif_max")).to_have_value("1", timeout=10_000)
@@ -162,6 +163,7 @@ def test_scene_csvs_hold_the_start_and_psi_in_both_units(page, server):
     from pathlib import Path
 
     open_app(page, server, "?omega=2.8&psi=0.3&x0=0.25&v0=-0.5&bif_n=40")
+    open_settings(page)
     page.get_by_text("Downloads", exact=True).click()
     for label in ("Impacts (CSV)", "Poincaré points (CSV)"):
         with page.expect_download(timeout=15_000) as info:
