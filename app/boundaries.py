@@ -16,15 +16,13 @@ from __future__ import annotations
 import dataclasses
 import logging
 import math
-import threading
 import time
-from collections import OrderedDict
 
 import numpy as np
 
 import impactlib as il
 
-from .branches import _follow, on_branch
+from .branches import BranchCache, _follow, on_branch
 from .settings import SWEEP_RANGES
 from .stability import exact_run, settled_orbit
 from .state import Run
@@ -136,36 +134,7 @@ def compute(req: BoundaryRequest, live=lambda: True):
                       f"{time.perf_counter() - tic:.1f} s{cut}")
 
 
-class _Cache:
-    """Complete boundary sets by request key, least recently used dropped first."""
-
-    def __init__(self, max_items: int = CACHE_ITEMS):
-        self.max_items = max_items
-        self._items: OrderedDict = OrderedDict()
-        self._lock = threading.Lock()
-
-    def get(self, key):
-        with self._lock:
-            if key in self._items:
-                self._items.move_to_end(key)
-                return self._items[key]
-        return None
-
-    def put(self, key, value: BoundarySet) -> None:
-        if not value.complete:
-            return
-        with self._lock:
-            self._items[key] = value
-            self._items.move_to_end(key)
-            while len(self._items) > self.max_items:
-                self._items.popitem(last=False)
-
-    def clear(self) -> None:
-        with self._lock:
-            self._items.clear()
-
-
-CACHE = _Cache()
+CACHE = BranchCache(CACHE_ITEMS)      # complete boundary sets by request key
 
 
 def boundary_sets(req: BoundaryRequest, live=lambda: True):

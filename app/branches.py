@@ -152,7 +152,8 @@ def compute(run: Run, seed_values: list[float], live=lambda: True) -> BranchSet:
 
 
 class BranchCache:
-    """Complete branch sets by diagram key, least recently used dropped first."""
+    """Complete result sets (branches by diagram key, boundary curves by request key):
+    least recently used dropped first; an incomplete set is not kept."""
 
     def __init__(self, max_items: int = CACHE_ITEMS):
         self.max_items = max_items
@@ -166,7 +167,7 @@ class BranchCache:
                 return self._items[key]
         return None
 
-    def put(self, key, value: BranchSet) -> None:
+    def put(self, key, value) -> None:
         if not value.complete:
             return
         with self._lock:
