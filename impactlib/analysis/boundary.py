@@ -48,8 +48,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..kernels._jit import jit
-from .continuation import (Event, segments_clearance, segments_monodromy, segments_residual,
-                           segments_section)
+from .continuation import (Event, locate_on_step, segments_clearance, segments_monodromy,
+                           segments_residual, segments_section)
 from ..kernels.flight import G, R, flight_state, start_segment, system_constants
 from ..io.header import write_csv
 from ..model import FIELDS, MAGNITUDE_MAX, MAGNITUDE_MIN, PARAM_NAMES, Params
@@ -751,35 +751,6 @@ def _passes(y0, ya, yb):
 
 
 def _locate(curve, y0, t0, s_hi, test, f_lo, f_hi):
-    """The point of the step (y0, t0, arclength s_hi) where ``test`` is zero: Illinois
-    false position in the arclength."""
-    lo, hi = 0.0, s_hi
-    y_best = None
-    side = 0
-    for _ in range(60):
-        s = (lo * f_hi - hi * f_lo) / (f_hi - f_lo) if f_hi != f_lo else 0.5 * (lo + hi)
-        if not (lo < s < hi):
-            s = 0.5 * (lo + hi)
-        y, _ = curve.correct(y0 + s * t0, t0, t0 @ y0 + s)
-        if y is None:
-            s = 0.5 * (lo + hi)
-            y, _ = curve.correct(y0 + s * t0, t0, t0 @ y0 + s)
-            if y is None:
-                break
-        fs = test(y)
-        y_best = y
-        if fs == 0.0 or not math.isfinite(fs):
-            break
-        if (fs > 0) == (f_lo > 0):
-            lo, f_lo = s, fs
-            if side == 1:
-                f_hi *= 0.5
-            side = 1
-        else:
-            hi, f_hi = s, fs
-            if side == -1:
-                f_lo *= 0.5
-            side = -1
-        if hi - lo <= 1e-11 * (1.0 + abs(s_hi)):
-            break
-    return y_best
+    """The point of the step (y0, t0, arclength s_hi) where ``test`` is zero."""
+    return locate_on_step(lambda s: curve.correct(y0 + s * t0, t0, t0 @ y0 + s)[0], test,
+                          s_hi, f_lo, f_hi)

@@ -392,8 +392,15 @@ def _correct(prob, z_pred, t_dir, s_target=None, z_base=None):
 
 
 def _locate(prob, z0, t0, s_hi, kind, f_lo, f_hi):
-    """The point of the step (z0, t0, arclength s_hi) where test ``kind`` is zero:
-    Illinois false position in the arclength."""
+    """The point of the step (z0, t0, arclength s_hi) where test ``kind`` is zero."""
+    return locate_on_step(lambda s: _correct(prob, z0 + s * t0, t0, s, z0)[0],
+                          lambda z: prob.describe(z)[5][kind], s_hi, f_lo, f_hi)
+
+
+def locate_on_step(point_at, test, s_hi, f_lo, f_hi):
+    """The point of a continuation step where ``test`` changes sign: Illinois false
+    position in the arclength s in (0, s_hi), ``point_at(s)`` the corrected point there
+    (None where the corrector fails; then the midpoint is tried once)."""
     lo, hi = 0.0, s_hi
     z_best = None
     side = 0
@@ -401,13 +408,13 @@ def _locate(prob, z0, t0, s_hi, kind, f_lo, f_hi):
         s = (lo * f_hi - hi * f_lo) / (f_hi - f_lo) if f_hi != f_lo else 0.5 * (lo + hi)
         if not (lo < s < hi):
             s = 0.5 * (lo + hi)
-        z, _ = _correct(prob, z0 + s * t0, t0, s, z0)
+        z = point_at(s)
         if z is None:
             s = 0.5 * (lo + hi)
-            z, _ = _correct(prob, z0 + s * t0, t0, s, z0)
+            z = point_at(s)
             if z is None:
                 break
-        fs = prob.describe(z)[5][kind]
+        fs = test(z)
         z_best = z
         if fs == 0.0 or not math.isfinite(fs):
             break
