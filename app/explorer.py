@@ -269,7 +269,7 @@ class Explorer(pn.viewable.Viewer):
         if run is None:
             return False
         now = state.snapshot(self.settings)
-        differ = {n: v for n, v in state.applied(run).items() if now[n] != v}
+        differ = {n: v for n, v in state.applied(run).items() if not state.holds(now[n], v)}
         if not differ:
             return False
         keep, self._keep_message = self._keep_message or refused, True

@@ -125,6 +125,15 @@ def rounded(s, x: float) -> float:
     return significant(x)
 
 
+def holds(widget_value, value) -> bool:
+    """A widget holding ``widget_value`` already shows ``value``: equal, or floats apart
+    by rounding noise only (a slider's keyboard steps add up to 2.0199999999999996).
+    Writing such a value back would move a slider the user is still moving."""
+    if isinstance(widget_value, float) and isinstance(value, float):
+        return math.isclose(widget_value, value, rel_tol=1e-12, abs_tol=1e-15)
+    return widget_value == value
+
+
 class SettingsError(ValueError):
     """Settings that cannot be computed; ``fields`` holds the names of the bad ones."""
 

@@ -139,6 +139,20 @@ def test_values_the_core_accepts_are_applied_beyond_the_sliders(make_explorer, n
     assert e.message == "" and getattr(e.run.params, name) == value
 
 
+def test_a_slider_step_sum_is_applied_without_moving_the_slider_back(make_explorer):
+    """Keyboard steps on a slider add up in binary (2.01 + 0.01 = 2.0199999999999996).
+    The run takes the value on the step grid; writing it back would reset a slider the
+    user is still moving, losing the steps made meanwhile. A value truly off the grid
+    is still shown as applied."""
+    e = make_explorer()
+    stepped = 2.01 + 0.01
+    assert stepped != 2.02
+    e.settings.omega = stepped
+    assert e.run.params.omega == 2.02 and e.settings.omega == stepped
+    e.settings.omega = 2.0234
+    assert e.run.params.omega == 2.02 and e.settings.omega == 2.02
+
+
 def test_garbage_url_shows_message_and_defaults(make_explorer):
     e = make_explorer(omega="banana", r="0.5")
     assert "omega" in e.message and e.message_pane.visible
