@@ -79,6 +79,40 @@ def deliver_stranded_writes() -> None:
     pdoc._dispatch_msgs = dispatch_msgs
 
 
+# -- a socket lost twice (Bokeh 3.9.2) ----------------------------------------------------
+
+def tolerate_lost_by_keep_alive() -> None:
+    """Close a websocket quietly that Bokeh's keep-alive has already let go.
+
+    Upstream (``bokeh.server.tornado.BokehTornado._keep_alive``): a ping that finds the
+    socket closed calls ``client_lost``, which detaches the session from the
+    connection; tornado then calls ``WSHandler.on_close``, which asks the connection
+    for its session and fails ``assert self._session is not None``: a traceback in the
+    log when a page closes just as the ping runs (seen under load: a page reloaded
+    while its session was being created). The session was already released, so there
+    is nothing left to do. Idempotent, per process.
+    """
+    import logging
+
+    from bokeh.server.views.ws import WSHandler
+
+    if getattr(WSHandler.on_close, "_impact_explorer", False):
+        return
+    original = WSHandler.on_close
+
+    def on_close(self):
+        if self.connection is not None and self.connection._session is None:
+            logging.getLogger("bokeh.server.views.ws").info(
+                "WebSocket connection closed: code=%s, reason=%r (already released)",
+                self.close_code, self.close_reason)
+            return
+        original(self)
+
+    on_close._impact_explorer = True
+    on_close.__wrapped__ = original
+    WSHandler.on_close = on_close
+
+
 # -- reconnecting to the same session (BokehJS 3.9.2) -------------------------------------
 
 #: Patches of BokehJS's ``ClientConnection``, run in the page once its document is ready.

@@ -47,3 +47,35 @@ def test_the_bokehjs_parts_the_reconnect_fix_touches_exist():
     assert "this.session.document.replace_with_json(n)" in bokehjs
     for name in ("client/connection", "protocol/receiver", "document"):
         assert f'"{name}"' in panel_fixes.RECONNECT_JS
+
+
+def test_a_socket_the_keep_alive_let_go_closes_quietly():
+    """The race replayed with Bokeh's own objects: the keep-alive's ``client_lost``
+    detaches the session, then tornado calls ``on_close``. Upstream raises; the
+    workaround returns, and a live connection still goes through upstream."""
+    from types import SimpleNamespace
+
+    from bokeh.server.connection import ServerConnection
+    from bokeh.server.views.ws import WSHandler
+
+    panel_fixes.tolerate_lost_by_keep_alive()
+    upstream = WSHandler.on_close.__wrapped__
+
+    def handler():
+        notified, lost = [], []
+        session = SimpleNamespace(subscribe=lambda c: None, unsubscribe=lambda c: None,
+                                  notify_connection_lost=lambda: notified.append(1))
+        conn = ServerConnection(None, None, None, session)
+        app = SimpleNamespace(client_lost=lambda c: (lost.append(c), c.detach_session()))
+        return SimpleNamespace(connection=conn, close_code=None, close_reason=None,
+                               application=app), notified, lost
+
+    gone, _, _ = handler()
+    gone.application.client_lost(gone.connection)       # what the failed ping does
+    with pytest.raises(AssertionError):
+        upstream(gone)                                   # the upstream bug
+    WSHandler.on_close(gone)                             # quiet
+
+    live, notified, lost = handler()
+    WSHandler.on_close(live)
+    assert notified == [1] and lost == [live.connection]
