@@ -1,10 +1,13 @@
-"""Bifurcation sweeps and regime maps on a Dask cluster (optional extra ``dask``).
+"""Bifurcation sweeps, regime maps and basins on a Dask cluster (optional extra ``dask``).
 
 The parameter grid is cut into chunks; each chunk is one task that runs the ordinary
 local sweep on one thread (``impactlib.bifurcation(..., workers=1)`` for a block of
 values, ``impactlib.regime_map(..., workers=1)`` for a block of rows), and the chunks are
 put back together in order.  Every value is an independent run (or, with warm start, one
-sequential continuation per direction), so the result is the local run's, row for row::
+sequential continuation per direction), so the result is the local run's, row for row.
+Basins run the local driver (:func:`impactlib.iter_basins`) with its blocks of rows sent
+to the cluster instead of the thread pool; the attractors are told apart on the caller's
+side, block after block in row order, as locally::
 
     from dask.distributed import Client
     from impactlib import distributed as ild
@@ -12,6 +15,7 @@ sequential continuation per direction), so the result is the local run's, row fo
     with Client("tcp://scheduler:8786") as client:
         bif = ild.bifurcation(client, il.Params(), "omega", np.linspace(0.1, 5, 100_000))
         rmap = ild.regime_map(client, il.Params(), "omega", wx, "r", wy)
+        bas = ild.basins(client, il.Params(omega=2.62), (0, 1), (-1, 1), n=(200, 200))
 
 Nothing here imports dask: the caller brings a ``distributed.Client`` (install with
 ``pip install impact-explorer[dask]``), so ``impactlib`` works without the extra.  Each
@@ -20,13 +24,15 @@ worker process.
 """
 from __future__ import annotations
 
+import collections
 import dataclasses
 import math
 import time
 
 import numpy as np
 
-from ..model import Params
+from ..analysis import basins as _basins
+from ..model import Params, RunLimits
 from .diagrams import (CAP_PER_VALUE, Bifurcation, RegimeMap, _check_sweep, merge_parts,
                      _values_array, sweep_options, bifurcation as _local_bifurcation,
                      regime_map as _local_regime_map)
@@ -196,4 +202,83 @@ def regime_map(client, p: Params, name_x: str, values_x, name_y: str, values_y,
                                            x0=x0, v0=v0, dt=dt, rtol=rtol, atol=atol))
 
 
-__all__ = ["bifurcation", "regime_map"]
+# ---------------------------------------------------------------- basins
+
+
+class _KnownChaos:
+    """What a basins block reads of the caller's attractor registry, sent to a worker:
+    the chaotic attractors' boxes known when the block was handed out (a start that
+    fills one stops early)."""
+
+    def __init__(self, chaos_boxes):
+        self.chaos_boxes = chaos_boxes
+
+
+def _cluster_tasks(client, ahead: int):
+    """A ``tasks(fn, args_list)`` for the basins driver: at most ``ahead`` blocks on the
+    cluster at a time, results in order; closing it cancels the blocks not returned."""
+    def tasks(fn, args_list):
+        pending = collections.deque()
+        todo = iter(args_list)
+        try:
+            while True:
+                while len(pending) < ahead:
+                    args = next(todo, None)
+                    if args is None:
+                        break
+                    reg, *rest = args
+                    pending.append(client.submit(fn, _KnownChaos(reg.chaos_boxes), *rest,
+                                                 pure=False))
+                if not pending:
+                    return
+                yield pending.popleft().result()
+        finally:
+            if pending:
+                client.cancel(list(pending))
+    return tasks
+
+
+def iter_basins(client, p: Params, x_range, v_range, n=(100, 100), phase: float = 0.0, *,
+                max_periods: int = 1000, n_window: int = 128,
+                rows_per_block: int | None = None, time_limit: float | None = None,
+                limits: RunLimits = RunLimits()):
+    """:func:`impactlib.iter_basins` with the blocks of rows computed on a cluster.
+
+    Yields the same :class:`~impactlib.analysis.basins.BasinRows` as the local stream, in
+    row order; stop iterating (or ``close()``) to cancel the blocks still on the cluster.
+    At most two blocks per worker thread are on the cluster at a time (as the local run
+    keeps its pool busy).  Arguments as :func:`impactlib.basins`; validation happens here,
+    before anything is sent.
+    """
+    _check_client(client)
+    xr, vr, (nx, nv), phase = _basins._check(p, x_range, v_range, n, phase, max_periods,
+                                             n_window, time_limit)
+    return _basins._iter(p, xr, vr, nx, nv, phase, max_periods, n_window, rows_per_block,
+                         None, time_limit, limits,
+                         tasks=_cluster_tasks(client, 2 * _thread_count(client)))
+
+
+def basins(client, p: Params, x_range, v_range, n=(100, 100), phase: float = 0.0, *,
+           max_periods: int = 1000, n_window: int = 128, time_limit: float | None = None,
+           limits: RunLimits = RunLimits()) -> "_basins.Basins":
+    """:func:`impactlib.basins` with the grid's blocks of rows computed on a cluster.
+
+    Returns
+    -------
+    Basins
+        Equal (``==``: labels, attractors, work per start, message) to the local result.
+        One exception, as between two local runs: where a chaotic attractor is found in
+        the middle of the grid, a start in a block already handed out follows its full
+        ``max_periods`` instead of stopping on the attractor's box; its label is the same,
+        its entry in ``periods`` larger.  ``elapsed`` is the caller's wall time.
+    """
+    _check_client(client)
+    xr, vr, (nx, nv), ph = _basins._check(p, x_range, v_range, n, phase, max_periods,
+                                          n_window, time_limit)
+    tic = time.perf_counter()
+    blocks = iter_basins(client, p, xr, vr, (nx, nv), ph, max_periods=max_periods,
+                         n_window=n_window, time_limit=time_limit, limits=limits)
+    return _basins.collect(p, xr, vr, nx, nv, ph, tic, blocks)
+
+
+__all__ = ["bifurcation", "regime_map", "basins", "iter_basins"]
