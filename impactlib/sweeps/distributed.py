@@ -172,8 +172,19 @@ def regime_map(client, p: Params, name_x: str, values_x, name_y: str, values_y,
     RegimeMap
         Identical to the local map; ``elapsed`` is the caller's wall time.
     """
+    kwargs = dict(t_end=t_end, t_record=t_record, method=method, x0=x0, v0=v0, dt=dt,
+                  rtol=rtol, atol=atol, max_impacts=max_impacts, max_steps=max_steps)
+    vx, vy = _check_map(client, p, name_x, values_x, name_y, values_y, rows_per_task, kwargs)
+    tic = time.perf_counter()
+    size = int(rows_per_task) if rows_per_task else _default_chunk(client, vy.size, 1)
+    return _map_of_blocks(p, name_x, vx, name_y, vy, kwargs, tic,
+                          list(_regime_blocks(client, p, name_x, vx, name_y, vy, kwargs, size)))
+
+
+def _check_map(client, p, name_x, values_x, name_y, values_y, rows_per_task, kwargs):
     _check_client(client)
-    _check_sweep(p, [name_x, name_y], t_end, t_record, x0, v0, method, dt, rtol, atol)
+    _check_sweep(p, [name_x, name_y], kwargs["t_end"], kwargs["t_record"], kwargs["x0"],
+                 kwargs["v0"], kwargs["method"], kwargs["dt"], kwargs["rtol"], kwargs["atol"])
     if name_x == name_y:
         raise ValueError(f"name_x and name_y are both {name_x!r}")
     vx = _values_array(name_x, values_x)
@@ -182,24 +193,70 @@ def regime_map(client, p: Params, name_x: str, values_x, name_y: str, values_y,
                                       or int(rows_per_task) != rows_per_task
                                       or rows_per_task < 1):
         raise ValueError(f"rows_per_task={rows_per_task!r} must be a whole number >= 1")
-    kwargs = dict(t_end=t_end, t_record=t_record, method=method, x0=x0, v0=v0, dt=dt,
-                  rtol=rtol, atol=atol, max_impacts=max_impacts, max_steps=max_steps)
-    tic = time.perf_counter()
-    size = int(rows_per_task) if rows_per_task else _default_chunk(client, vy.size, 1)
+    return vx, vy
+
+
+def _regime_blocks(client, p, name_x, vx, name_y, vy, kwargs, size):
+    """((a, b), block) for the row blocks [a, b) of the map, in order, all submitted at
+    once; closing the generator cancels the blocks not returned yet."""
     edges = _edges(vy.size, size)
     n = len(edges)
-    futs = client.map(_regime_task, [p] * n, [name_x] * n, [vx] * n, [name_y] * n,
-                      [vy[a:b] for a, b in edges], [kwargs] * n, pure=False)
-    blocks = client.gather(futs)
-    impacts = np.concatenate([b[0] for b in blocks])
-    period = np.concatenate([b[1] for b in blocks])
-    status = np.concatenate([b[2] for b in blocks])
-    motions = {(iy + a, ix): mo
-               for (a, _), b in zip(edges, blocks) for (iy, ix), mo in b[3].items()}
+    futs = collections.deque(client.map(_regime_task, [p] * n, [name_x] * n, [vx] * n,
+                                        [name_y] * n, [vy[a:b] for a, b in edges],
+                                        [kwargs] * n, pure=False))
+    try:
+        for edge in edges:
+            yield edge, futs.popleft().result()
+    finally:
+        if futs:
+            client.cancel(list(futs))
+
+
+def _map_of_blocks(p, name_x, vx, name_y, vy, kwargs, tic, blocks) -> RegimeMap:
+    """The RegimeMap of rows vy from their blocks ((a, b), (impacts, period, status,
+    motions)) (row a of vy first)."""
+    a0 = blocks[0][0][0]
+    impacts = np.concatenate([b[0] for _, b in blocks])
+    period = np.concatenate([b[1] for _, b in blocks])
+    status = np.concatenate([b[2] for _, b in blocks])
+    motions = {(iy + a - a0, ix): mo
+               for (a, _), b in blocks for (iy, ix), mo in b[3].items()}
+    opts = {k: kwargs[k] for k in ("t_end", "t_record", "method", "x0", "v0", "dt", "rtol",
+                                   "atol")}
     return RegimeMap(name_x, vx, name_y, vy, impacts, period, status,
                      time.perf_counter() - tic, motions, params=p,
-                     options=sweep_options(t_end=t_end, t_record=t_record, method=method,
-                                           x0=x0, v0=v0, dt=dt, rtol=rtol, atol=atol))
+                     options=sweep_options(**opts))
+
+
+def iter_regime_map(client, p: Params, name_x: str, values_x, name_y: str, values_y,
+                    t_end: float = 500.0, t_record: float = 250.0, method: str = "exact", *,
+                    rows_per_task: int | None = None, x0: float | None = None,
+                    v0: float = 0.0, dt: float | None = None, rtol: float = 1e-6,
+                    atol: float = 1e-9, max_impacts: int = 1_000_000,
+                    max_steps: int = 20_000_000):
+    """:func:`impactlib.iter_regime_map` on a cluster: every block of ``rows_per_task``
+    rows is submitted at once and the blocks' RegimeMaps are yielded in row order as they
+    finish (``impactlib.sweeps.diagrams.merge_regime_maps`` joins them into the local
+    map).  Stop
+    iterating (or ``close()``) to cancel the blocks still on the cluster.  Validation
+    happens here, before anything is sent.  Other parameters as :func:`regime_map`."""
+    kwargs = dict(t_end=t_end, t_record=t_record, method=method, x0=x0, v0=v0, dt=dt,
+                  rtol=rtol, atol=atol, max_impacts=max_impacts, max_steps=max_steps)
+    vx, vy = _check_map(client, p, name_x, values_x, name_y, values_y, rows_per_task, kwargs)
+    size = int(rows_per_task) if rows_per_task else _default_chunk(client, vy.size, 1)
+
+    def stream():
+        blocks = _regime_blocks(client, p, name_x, vx, name_y, vy, kwargs, size)
+        tic = time.perf_counter()      # a block's elapsed: the wait for it
+        try:
+            for (a, b), block in blocks:
+                yield _map_of_blocks(p, name_x, vx, name_y, vy[a:b], kwargs, tic,
+                                     [((a, b), block)])
+                tic = time.perf_counter()
+        finally:
+            blocks.close()
+    return stream()
+
 
 
 # ---------------------------------------------------------------- basins
@@ -281,4 +338,4 @@ def basins(client, p: Params, x_range, v_range, n=(100, 100), phase: float = 0.0
     return _basins.collect(p, xr, vr, nx, nv, ph, tic, blocks)
 
 
-__all__ = ["bifurcation", "regime_map", "basins", "iter_basins"]
+__all__ = ["bifurcation", "regime_map", "iter_regime_map", "basins", "iter_basins"]

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 import impactlib as il
+from impactlib.sweeps.diagrams import merge_regime_maps
 
 distributed = pytest.importorskip("distributed")
 ild = pytest.importorskip("impactlib.sweeps.distributed")
@@ -197,3 +198,21 @@ def test_basins_bad_arguments_fail_before_submitting(client):
     with pytest.raises(TypeError, match="Client"):
         ild.basins(object(), P262, (0.0, 1.0), (-1.0, 1.0))
 
+
+
+@pytest.mark.parametrize("rows", [None, 2])
+def test_iter_regime_map_blocks_make_the_local_map(client, rows):
+    vx, vy = np.linspace(0.5, 4.5, 7), np.linspace(0.1, 0.9, 5)
+    want = il.regime_map(P, "omega", vx, "r", vy, **RUN)
+    parts = list(ild.iter_regime_map(client, P, "omega", vx, "r", vy, rows_per_task=rows,
+                                     **RUN))
+    if rows == 2:
+        assert [rm.values_y.size for rm in parts] == [2, 2, 1]
+    assert merge_regime_maps(parts) == want
+
+
+def test_iter_regime_map_validates_before_submitting(client):
+    with pytest.raises(ValueError, match="both 'r'"):
+        ild.iter_regime_map(client, P, "r", [0.5], "r", [0.5], **RUN)
+    with pytest.raises(ValueError, match="rows_per_task"):
+        ild.iter_regime_map(client, P, "omega", [1.0], "r", [0.5], rows_per_task=0, **RUN)
