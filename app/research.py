@@ -38,8 +38,10 @@ MAP_MAX_IMPACTS = 5_000
 FIRST_ROWS = 2
 BLOCK_SECONDS = 0.4
 MAX_BLOCK_ROWS = 32
-#: On a Dask cluster the map is cut into this many blocks of rows, all submitted at once.
-CLUSTER_BLOCKS = 16
+#: On a Dask cluster the map goes in blocks of this many rows, all submitted at once:
+#: small enough that the first rows show after one block's work, large enough that the
+#: scheduler's cost per task (milliseconds) stays small against it.
+CLUSTER_ROWS = 4
 #: Basins: periods followed per start before it counts as not settled.
 BASINS_MAX_PERIODS = 1000
 
@@ -159,7 +161,7 @@ def map_rows(req: MapRequest, wall_time: float = MAP_WALL_TIME, client=None):
     The blocks are the library's stream (``il.iter_regime_map``: cells are independent,
     so the rows of a map are the map of those rows), here in blocks sized by
     ``block_rows``, or with a Dask ``client`` on its cluster in blocks of
-    ``CLUSTER_BLOCKS`` parts (the same cells either way). Stop iterating to cancel. Raises
+    ``CLUSTER_ROWS`` rows (the same cells either way). Stop iterating to cancel. Raises
     ValueError (from the core) for parameters it refuses, before any block.
     """
     run = req.run
@@ -171,7 +173,7 @@ def map_rows(req: MapRequest, wall_time: float = MAP_WALL_TIME, client=None):
                                    rows=block_rows, **opts)
     else:
         parts = ild.iter_regime_map(client, run.params, req.name_x, vx, req.name_y, vy,
-                                    rows_per_task=max(1, vy.size // CLUSTER_BLOCKS),
+                                    rows_per_task=CLUSTER_ROWS,
                                     **opts)
     classes = RegimeClasses()
     tic = time.perf_counter()
