@@ -8,7 +8,7 @@ worker thread (never the event loop); an address that cannot be reached, or a se
 without the ``dask`` extra, is said once in the log (one WARNING line) and on every
 picture's status line, and the pictures are computed on the server's threads. A cluster
 that fails during a picture fails that picture with a message; the next one tries it
-again (the client reconnects by itself).
+again.
 """
 from __future__ import annotations
 
