@@ -12,6 +12,10 @@
 # IMPACT_PROCS: server processes (panel serve --num-procs, default 1), each with its own
 # sessions and caches; give the container that many CPUs. Anything but a whole number
 # >= 1 is refused at start (0 would let Tornado take the host's core count).
+# IMPACT_DASK_SCHEDULER: a Dask scheduler (tcp://host:8786) whose workers compute the
+# regime maps, basins and boundary curves (same results; the workers need impactlib and
+# the dask versions of scripts/constraints.txt); empty (the default): the server's threads.
+#   docker run --rm -p 127.0.0.1:5006:5006 -e IMPACT_DASK_SCHEDULER=tcp://10.0.0.5:8786 impact-explorer
 # The process runs as uid 10001 and writes only to /var/cache/impact (its HOME, the
 # Numba cache warmed at build time and TMPDIR), so the image also
 # runs with a read-only root: --read-only -v impact-cache:/var/cache/impact.
@@ -28,6 +32,7 @@ ENV PATH="${VIRTUAL_ENV}/bin:${PATH}" \
     NUMBA_CACHE_DIR="${IMPACT_CACHE}/numba" \
     NUMBA_CPU_NAME=generic \
     IMPACT_ALLOWED_ORIGINS=localhost:5006 \
+    IMPACT_DASK_SCHEDULER="" \
     IMPACT_PROCS=1
 
 # Debian's own Python 3.11 (python3 3.11.2-1+b1 is bookworm's for its whole life; the
@@ -45,7 +50,8 @@ RUN groupadd --gid 10001 app \
     && install -d -o app -g app -m 0750 "${IMPACT_CACHE}" "${NUMBA_CACHE_DIR}" \
         "${IMPACT_CACHE}/tmp"
 
-# Install the project (not editable) with the versions pinned in scripts/constraints.txt, using
+# Install the project (not editable, with the dask extra for IMPACT_DASK_SCHEDULER) with the
+# versions pinned in scripts/constraints.txt, using
 # the pip that Debian's python3-venv ships (23.0.1, which uses Debian's CA store).
 # RUN steps name paths only through ENV/ARG variables: tests/container replays them.
 ARG IMPACT_SRC=/tmp/impact-src
@@ -54,7 +60,7 @@ COPY impactlib/ ${IMPACT_SRC}/impactlib/
 COPY app/ ${IMPACT_SRC}/app/
 RUN python3 -m venv "${VIRTUAL_ENV}" \
     && "${VIRTUAL_ENV}/bin/pip" install --no-cache-dir --disable-pip-version-check \
-        -c "${IMPACT_SRC}/constraints.txt" "${IMPACT_SRC}" \
+        -c "${IMPACT_SRC}/constraints.txt" "${IMPACT_SRC}[dask]" \
     && rm -rf "${IMPACT_SRC}"
 
 COPY app/ ${IMPACT_HOME}/app/

@@ -13,6 +13,7 @@ sessions (LRU by the request's key).  Nothing here knows about Panel.
 """
 from __future__ import annotations
 
+import collections
 import dataclasses
 import logging
 import math
@@ -100,8 +101,34 @@ def branch_events(req: BoundaryRequest, live, deadline) -> list:
     return [item[-1] for item in sorted(events, key=lambda item: item[:3])]
 
 
-def compute(req: BoundaryRequest, live=lambda: True):
-    """Generator of ``BoundarySet`` (all curves so far), one after each curve."""
+def _followed(jobs, name: str, ds: float, client):
+    """``il.boundary`` of each (event, stop) in order: one after the other as asked for,
+    or with a Dask ``client`` all at once on its cluster (closing cancels the rest). A
+    curve the core refuses comes as its ValueError, in its turn."""
+    if client is None:
+        for e, stop in jobs:
+            try:
+                yield il.boundary(e, name, stop, ds=ds, max_points=MAX_POINTS)
+            except ValueError as exc:
+                yield exc
+        return
+    futures = collections.deque(client.map(il.boundary, [e for e, _ in jobs],
+                                           [name] * len(jobs), [s for _, s in jobs],
+                                           ds=ds, max_points=MAX_POINTS, pure=False))
+    try:
+        while futures:
+            try:
+                yield futures.popleft().result()
+            except ValueError as exc:
+                yield exc
+    finally:
+        if futures:
+            client.cancel(list(futures))
+
+
+def compute(req: BoundaryRequest, live=lambda: True, client=None):
+    """Generator of ``BoundarySet`` (all curves so far), one after each curve; with a Dask
+    ``client`` the curves are followed on its cluster (the same curves)."""
     tic = time.perf_counter()
     deadline = tic + WALL_TIME
     events = branch_events(req, live, deadline)
@@ -115,18 +142,21 @@ def compute(req: BoundaryRequest, live=lambda: True):
             if stop != getattr(e.params, req.name_y)]
     curves, done = [], 0
     yield BoundarySet((), 0, len(jobs), False, f"{len(events)} events to follow")
-    for e, stop in jobs:
-        if not live() or time.perf_counter() > deadline:
-            break
-        done += 1
-        try:
-            b = il.boundary(e, req.name_y, stop, ds=STEP * (hi - lo), max_points=MAX_POINTS)
-        except ValueError as exc:      # e.g. a second parameter the event cannot take
-            log.info("boundary from %s not followed: %s", tuple(e), exc)
-            continue
-        curves.append(b)
-        yield BoundarySet(tuple(curves), done, len(jobs), False,
-                          f"{done} of {len(jobs)} curves")
+    followed = _followed(jobs, req.name_y, STEP * (hi - lo), client)
+    try:
+        for e, stop in jobs:
+            if not live() or time.perf_counter() > deadline:
+                break
+            done += 1
+            b = next(followed)
+            if isinstance(b, ValueError):    # e.g. a second parameter the event cannot take
+                log.info("boundary from %s not followed: %s", tuple(e), b)
+                continue
+            curves.append(b)
+            yield BoundarySet(tuple(curves), done, len(jobs), False,
+                              f"{done} of {len(jobs)} curves")
+    finally:
+        followed.close()
     complete = done == len(jobs) and live()
     cut = "" if complete else " (stopped at the time bound)" if live() else " (cancelled)"
     yield BoundarySet(tuple(curves), done, len(jobs), complete,
@@ -137,15 +167,15 @@ def compute(req: BoundaryRequest, live=lambda: True):
 CACHE = BranchCache(CACHE_ITEMS)      # complete boundary sets by request key
 
 
-def boundary_sets(req: BoundaryRequest, live=lambda: True):
+def boundary_sets(req: BoundaryRequest, live=lambda: True, client=None):
     """The curves of ``req`` as a stream of ``BoundarySet``: from the cache at once, or
-    computed (and kept once complete)."""
+    computed (here, or on the cluster of a Dask ``client``) and kept once complete."""
     hit = CACHE.get(req.key())
     if hit is not None:
         yield hit
         return
     last = None
-    for last in compute(req, live):
+    for last in compute(req, live, client):
         yield last
     if last is not None:
         CACHE.put(req.key(), last)

@@ -49,9 +49,12 @@ _RESEARCH_POOL = ThreadPoolExecutor(max_workers=2, thread_name_prefix="impact-re
 
 
 class Explorer(pn.viewable.Viewer):
-    """One session of the app. ``args`` are the URL query arguments."""
+    """One session of the app. ``args`` are the URL query arguments; ``loop`` runs results
+    on the thread that owns the page (``app.jobs.KernelLoop`` in a notebook, see
+    ``app.notebook``); without it, a served session uses its own (``SessionLoop``) and
+    one without a server runs every job at once in the caller's thread."""
 
-    def __init__(self, args=None, **params):
+    def __init__(self, args=None, *, loop=None, **params):
         super().__init__(**params)
         values, scene, errors = state.from_query(args or {})
         self.settings = Settings(**values)
@@ -61,7 +64,8 @@ class Explorer(pn.viewable.Viewer):
         self._keep_message = True         # the link's message stays until a user change
         self._restoring = False           # falling back to defaults (not a user change)
         doc = self._doc = session_doc()
-        dispatch = self._loop = SessionLoop(doc)
+        dispatch = self._loop = loop if loop is not None else SessionLoop(doc)
+        background = doc is not None or loop is not None     # jobs in the pools
         self._loaded = doc is None        # served: the diagram starts once the page is up
         self.views = [cls() for cls in VIEWS]
         for view in self.views:
@@ -86,24 +90,24 @@ class Explorer(pn.viewable.Viewer):
                                      on_reset=self.reset, rooms=rooms)
         self.widgets, self.badge, self.caption = c.widgets, c.badge, c.caption
         self.message_pane, self.diagram_status = c.message_pane, c.diagram_status
-        pool = None if doc is None else _SCENE_POOL
+        pool = _SCENE_POOL if background else None
         self.scene_job = Job("scene", lambda run, t: compute.scene_and_section(run, self._shown), dispatch,
                              pool=pool, on_result=self._scene_done, show_stale=True)
         self.window_job = Job("window", lambda req, t: compute.window_columns(*req), dispatch,
                               pool=pool, on_result=self._window_done)
         self.diagram = SessionDiagram(self.views, self.controls, dispatch,
-                                      None if doc is None else _BRANCH_POOL)
+                                      _BRANCH_POOL if background else None)
         self.accuracy_job = Job(
             "accuracy", lambda run, t: accuracy.to_html(accuracy.compare_methods(run)),
-            dispatch, pool=None if doc is None else _ACCURACY_POOL,
+            dispatch, pool=_ACCURACY_POOL if background else None,
             on_result=self._accuracy_done)
         self.readout = None               # the stability readout shown (stability.Readout)
         self.stability_job = Job("stability", lambda run, t: stability.readout(run), dispatch,
-                                 pool=None if doc is None else _STABILITY_POOL,
+                                 pool=_STABILITY_POOL if background else None,
                                  on_result=self._stability_done)
         # one heavy job per session: the regime map or the basins, the newest request wins
         self.research = ResearchPanel(self.widgets, dispatch=dispatch,
-                                      pool=None if doc is None else _RESEARCH_POOL,
+                                      pool=_RESEARCH_POOL if background else None,
                                       current=lambda: (self._wanted, self.scene),
                                       pick=self.pick, downloads=self.downloads)
         self.compare = CompareMode(dispatch, pool)

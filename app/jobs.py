@@ -108,6 +108,68 @@ class SessionLoop:
                                 str(exc)[:300])
 
 
+class KernelLoop:
+    """``loop(fn)`` runs ``fn`` on the thread of an asyncio event loop (a Jupyter
+    kernel's own loop), never on the calling worker thread: a session without a server
+    whose jobs still run in the background. Functions run in the order they were sent,
+    all that waited at once, then Bokeh changes made to displayed figures are pushed to
+    the notebook. ``idle`` is True when nothing waits."""
+
+    def __init__(self, loop):
+        self.loop = loop
+        self._queue: list[Callable[[], None]] = []     # sent, not run yet (oldest first)
+        self._lock = threading.Lock()
+
+    def __call__(self, fn: Callable[[], None]) -> None:
+        with self._lock:
+            self._queue.append(fn)
+            if len(self._queue) > 1:       # a wake-up is already on its way
+                return
+        try:
+            self.loop.call_soon_threadsafe(self._drain)
+        except RuntimeError as exc:        # the kernel's loop is closed
+            log.info("kernel loop: nothing run: %s", exc)
+            self.close()
+
+    @property
+    def idle(self) -> bool:
+        with self._lock:
+            return not self._queue
+
+    def close(self) -> None:
+        """Forget what waits."""
+        with self._lock:
+            self._queue.clear()
+
+    def _drain(self) -> None:
+        with self._lock:
+            fns, self._queue = self._queue, []
+        for fn in fns:
+            try:
+                fn()
+            except Exception as exc:        # one failed update must not drop the others
+                log.warning("a session update failed: %s: %s", type(exc).__name__,
+                            str(exc)[:300])
+        push_displayed()
+
+
+def push_displayed() -> None:
+    """Send what changed in the Bokeh models of every output shown in the notebook.
+
+    Panel holds a notebook output's document and sends its held changes when one of its
+    own widgets changes; a view that assigns ``source.data`` changes a Bokeh model only,
+    which Panel sends on ``push_notebook`` (pushing a document with no change sends
+    nothing)."""
+    from panel.io.notebook import push_on_root
+    from panel.io.state import state
+
+    for ref in list(state._views):
+        try:
+            push_on_root(ref)
+        except Exception as exc:            # an output closed meanwhile
+            log.info("notebook push skipped: %s", exc)
+
+
 class Ticket:
     """One request of a ``Job``, as its work sees it."""
 

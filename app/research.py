@@ -19,6 +19,7 @@ import numpy as np
 
 import impactlib as il
 from impactlib.analysis.classify import describe
+from impactlib.sweeps import distributed as ild
 
 from .settings import SWEEP_RANGES
 from .state import Run
@@ -37,6 +38,10 @@ MAP_MAX_IMPACTS = 5_000
 FIRST_ROWS = 2
 BLOCK_SECONDS = 0.4
 MAX_BLOCK_ROWS = 32
+#: On a Dask cluster the map goes in blocks of this many rows, all submitted at once:
+#: small enough that the first rows show after one block's work, large enough that the
+#: scheduler's cost per task (milliseconds) stays small against it.
+CLUSTER_ROWS = 4
 #: Basins: periods followed per start before it counts as not settled.
 BASINS_MAX_PERIODS = 1000
 
@@ -141,45 +146,59 @@ class MapRows:
     message: str
 
 
-def map_rows(req: MapRequest, wall_time: float = MAP_WALL_TIME):
+def block_rows(done: int, elapsed: float) -> int:
+    """Rows of the next block of a map computed here: FIRST_ROWS first, then about
+    BLOCK_SECONDS of work at the rate measured so far."""
+    if done == 0:
+        return FIRST_ROWS
+    rate = done / max(elapsed, 1e-6)
+    return int(min(max(os.cpu_count() or 1, rate * BLOCK_SECONDS), MAX_BLOCK_ROWS))
+
+
+def map_rows(req: MapRequest, wall_time: float = MAP_WALL_TIME, client=None):
     """Stream the regime map of ``req`` in blocks of rows (``MapRows``).
 
-    Each block is one ``il.regime_map`` call over some rows (cells are independent, so
-    the rows of a map are the map of those rows). Stop iterating to cancel. Raises
+    The blocks are the library's stream (``il.iter_regime_map``: cells are independent,
+    so the rows of a map are the map of those rows), here in blocks sized by
+    ``block_rows``, or with a Dask ``client`` on its cluster in blocks of
+    ``CLUSTER_ROWS`` rows (the same cells either way). Stop iterating to cancel. Raises
     ValueError (from the core) for parameters it refuses, before any block.
     """
     run = req.run
     vx, vy = req.values_x, req.values_y
     opts = dict(t_end=run.t_end, t_record=run.t_record, method="exact", x0=run.x0,
                 v0=run.v0, max_steps=MAP_MAX_STEPS, max_impacts=MAP_MAX_IMPACTS)
+    if client is None:
+        parts = il.iter_regime_map(run.params, req.name_x, vx, req.name_y, vy,
+                                   rows=block_rows, **opts)
+    else:
+        parts = ild.iter_regime_map(client, run.params, req.name_x, vx, req.name_y, vy,
+                                    rows_per_task=CLUSTER_ROWS,
+                                    **opts)
     classes = RegimeClasses()
-    workers = os.cpu_count() or 1
     tic = time.perf_counter()
     done = limited = 0
-    rows = FIRST_ROWS
-    while done < vy.size:
-        rows = min(rows, vy.size - done)
-        rm = il.regime_map(run.params, req.name_x, vx, req.name_y, vy[done:done + rows],
-                           rows_per_task=max(1, math.ceil(rows / (2 * workers))), **opts)
-        limited += int(np.count_nonzero((rm.status == il.RunStatus.IMPACT_LIMIT)
-                                        | (rm.status == il.RunStatus.STEP_LIMIT)))
-        start, done = done, done + rows
-        elapsed = time.perf_counter() - tic
-        stopped = done < vy.size and elapsed > wall_time
-        notes = []
-        if stopped:
-            notes.append(f"stopped at the time limit ({wall_time:g} s) after {done} of "
-                         f"{vy.size} rows")
-        if limited:
-            notes.append(f"{limited} cells stopped at a work ceiling")
-        cells = classes.classes(rm.impacts, rm.period)
-        yield MapRows(start, cells, rm.impacts, rm.period,
-                      classes.legend(), tuple(classes.labels), done, vy.size, limited, elapsed,
-                      "; ".join(notes) or "complete")
-        if stopped:
-            return
-        rate = done / max(elapsed, 1e-6)
-        rows = int(min(max(workers, rate * BLOCK_SECONDS), MAX_BLOCK_ROWS))
+    try:
+        for rm in parts:
+            limited += int(np.count_nonzero((rm.status == il.RunStatus.IMPACT_LIMIT)
+                                            | (rm.status == il.RunStatus.STEP_LIMIT)))
+            start, done = done, done + rm.values_y.size
+            elapsed = time.perf_counter() - tic
+            stopped = done < vy.size and elapsed > wall_time
+            notes = []
+            if stopped:
+                notes.append(f"stopped at the time limit ({wall_time:g} s) after {done} of "
+                             f"{vy.size} rows")
+            if limited:
+                notes.append(f"{limited} cells stopped at a work ceiling")
+            cells = classes.classes(rm.impacts, rm.period)
+            yield MapRows(start, cells, rm.impacts, rm.period,
+                          classes.legend(), tuple(classes.labels), done, vy.size, limited,
+                          elapsed, "; ".join(notes) or "complete")
+            if stopped:
+                return
+    finally:
+        parts.close()
 
 
 # -- basins ---------------------------------------------------------------------------
@@ -228,11 +247,16 @@ def _nice(x: float) -> float:
     return round(math.ceil(x / e) * e, 12)
 
 
-def basins_rows(req: BasinsRequest, wall_time: float = BASINS_WALL_TIME):
-    """Stream the basins of ``req`` (``il.BasinRows`` blocks). Raises ValueError (the
-    core's message) for a window or parameters it refuses."""
-    return il.iter_basins(req.run.params, req.x_range, req.v_range, n=(req.n, req.n),
-                          phase=0.0, max_periods=BASINS_MAX_PERIODS, time_limit=wall_time)
+def basins_rows(req: BasinsRequest, wall_time: float = BASINS_WALL_TIME, client=None):
+    """Stream the basins of ``req`` (``il.BasinRows`` blocks), here or with a Dask
+    ``client`` on its cluster (the same blocks). Raises ValueError (the core's message)
+    for a window or parameters it refuses."""
+    args = (req.run.params, req.x_range, req.v_range)
+    opts = dict(n=(req.n, req.n), phase=0.0, max_periods=BASINS_MAX_PERIODS,
+                time_limit=wall_time)
+    if client is None:
+        return il.iter_basins(*args, **opts)
+    return ild.iter_basins(client, *args, **opts)
 
 
 def attractor_text(att) -> str:

@@ -16,7 +16,7 @@ import time
 
 import panel as pn
 
-from . import boundaries, research
+from . import boundaries, cluster, research
 
 from .controls import NamedHTML
 from .jobs import Job
@@ -44,6 +44,7 @@ class ResearchPanel:
         self._keys: dict = {}               # kind -> key of the request shown
         self._scene = None
         self._t0 = 0.0
+        self.where = ""                     # where the running picture is computed
         self.room = pn.Column(sizing_mode="stretch_both", css_classes=["ie-research"],
                               margin=0)
 
@@ -162,9 +163,11 @@ class ResearchPanel:
         """Stream the blocks of a regime map or basins picture to this panel."""
         kind, request = job
         block = None
+        client, where = cluster.client()     # None: on this server's threads
+        ticket.send(self.located, where)
         try:
-            blocks = (research.map_rows(request) if kind == MAP
-                      else research.basins_rows(request))
+            blocks = (research.map_rows(request, client=client) if kind == MAP
+                      else research.basins_rows(request, client=client))
             try:
                 for block in blocks:
                     ticket.send(self.rows, kind, block)
@@ -193,12 +196,20 @@ class ResearchPanel:
         self.status[kind].object = "computing…"
         self.buttons[kind].disabled = True
 
+    def located(self, where: str) -> None:
+        """Where the picture under way is computed ("" without a cluster setting)."""
+        self.where = where
+
+    def _at(self) -> str:
+        return f" — {self.where}" if self.where else ""
+
     def rows(self, kind: str, block) -> None:
         view = self.views[kind]
         view.rows(block)
         self.legend[kind].object = view.legend
         self.progress[kind].value = int(100 * block.rows_done / block.rows_total)
-        self.status[kind].object = f"computing… {block.rows_done}/{block.rows_total} rows"
+        self.status[kind].object = (f"computing… {block.rows_done}/{block.rows_total} rows"
+                                    f"{self._at()}")
 
     def finished(self, kind: str, block) -> None:
         """The last block arrived (``block`` None: there was none)."""
@@ -210,14 +221,14 @@ class ResearchPanel:
         head = (f"complete: {block.rows_total} rows in {elapsed:.2f} s" if complete
                 else f"partial: {block.rows_done if block else 0} rows in {elapsed:.2f} s")
         text = head if message == "complete" else f"{head} — {message}"
-        self.status[kind].object = text
+        self.status[kind].object = text + self._at()
         self.views[kind].finished("complete" if complete else "partial")
 
     def failed(self, kind: str, text: str) -> None:
         self.running = None
         self._keys.pop(kind, None)
         self.buttons[kind].disabled = False
-        self.status[kind].object = f"not computed — {text}"
+        self.status[kind].object = f"not computed — {text}{self._at()}"
         self.views[kind].finished("not computed")
 
     def cancelled(self) -> None:
@@ -271,8 +282,10 @@ class ResearchPanel:
             self.boundary_job.submit(req)
 
     def _boundary_work(self, req, ticket) -> None:
-        """Stream the boundary curves to the overlay, off the event loop."""
-        sets = boundaries.boundary_sets(req, live=lambda: ticket.live)
+        """Stream the boundary curves to the overlay, off the event loop (on the cluster
+        when one is set)."""
+        client, _ = cluster.client()
+        sets = boundaries.boundary_sets(req, live=lambda: ticket.live, client=client)
         try:
             for curves in sets:
                 ticket.send(self._boundaries_shown, curves)

@@ -649,7 +649,10 @@ def iter_basins(p: Params, x_range, v_range, n=(100, 100), phase: float = 0.0, *
 
 
 def _iter(p, xr, vr, nx, nv, phase, max_periods, n_window, rows_per_block, workers,
-          time_limit, limits):
+          time_limit, limits, tasks=None):
+    """The blocks of rows, each ``_block(reg, ...)``: through ``tasks(fn, args_list)``, a
+    generator of the results in order (default: the shared thread pool's ``run_tasks``;
+    :mod:`impactlib.sweeps.distributed` passes a Dask cluster's)."""
     tic = time.perf_counter()
     xs = np.linspace(*xr, nx)
     vs = np.linspace(*vr, nv)
@@ -680,7 +683,7 @@ def _iter(p, xr, vr, nx, nv, phase, max_periods, n_window, rows_per_block, worke
     args = [(reg, sp, rate, hmax, phase, xs, vs[a:b], *common) for a, b in zip(starts, stops)]
     done = 0
     stopped = False
-    gen = run_tasks(_block, args, workers)
+    gen = (run_tasks(_block, args, workers) if tasks is None else tasks(_block, args))
     try:
         for a, res in zip(starts, gen):
             outcome, n_out, m_out, chat, pts, err, box, fin, used = res
@@ -754,11 +757,17 @@ def basins(p: Params, x_range, v_range, n=(100, 100), phase: float = 0.0, *,
     xr, vr, (nx, nv), phase = _check(p, x_range, v_range, n, phase, max_periods, n_window,
                                      time_limit)
     tic = time.perf_counter()
+    return collect(p, xr, vr, nx, nv, phase, tic,
+                   _iter(p, xr, vr, nx, nv, phase, max_periods, n_window, None, workers,
+                         time_limit, limits))
+
+
+def collect(p, xr, vr, nx, nv, phase, tic, blocks) -> Basins:
+    """The :class:`Basins` of a grid from all its ``BasinRows`` blocks."""
     labels = np.full((nv, nx), -1, dtype=np.int64)
     periods = np.zeros((nv, nx), dtype=np.int64)
     last = None
-    for blk in _iter(p, xr, vr, nx, nv, phase, max_periods, n_window, None, workers,
-                     time_limit, limits):
+    for blk in blocks:
         rows = slice(blk.start, blk.start + blk.labels.shape[0])
         labels[rows] = blk.labels
         periods[rows] = blk.periods

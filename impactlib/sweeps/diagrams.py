@@ -718,12 +718,25 @@ def _bifurcation_in_chunks(p, name, values, *args, progress=None, cancel=None, c
         close()
 
 
-def iter_regime_map(p, name_x, values_x, name_y, values_y, *args, rows: int = ROWS_PER_BLOCK, **kwargs):
-    """Yield the RegimeMap of successive blocks of ``rows`` values of ``name_y`` (all of
-    ``values_x`` each); :func:`merge_regime_maps` joins them.  Stop iterating to cancel."""
+def iter_regime_map(p, name_x, values_x, name_y, values_y, *args, rows=ROWS_PER_BLOCK, **kwargs):
+    """Yield the RegimeMap of successive blocks of rows (values of ``name_y``, all of
+    ``values_x`` each); :func:`merge_regime_maps` joins them.  Stop iterating to cancel.
+
+    ``rows`` is the rows per block, or a callable ``rows(done, elapsed)`` giving the next
+    block's rows from the rows done so far and the seconds they took (a small first
+    block for a quick picture, later ones sized from the measured rate).  Other
+    arguments as :func:`regime_map`."""
+    if not callable(rows) and (isinstance(rows, bool) or not isinstance(rows, (int, np.integer))
+                               or rows < 1):
+        raise ValueError(f"rows={rows!r} must be a whole number >= 1 or a callable "
+                         "rows(done, elapsed)")
     vy = _values_array(name_y, values_y)
-    for a in range(0, vy.size, rows):
-        yield regime_map(p, name_x, values_x, name_y, vy[a:a + rows], *args, **kwargs)
+    tic = time.perf_counter()
+    a = 0
+    while a < vy.size:
+        size = max(1, int(rows(a, time.perf_counter() - tic) if callable(rows) else rows))
+        yield regime_map(p, name_x, values_x, name_y, vy[a:a + size], *args, **kwargs)
+        a += size
 
 
 def merge_regime_maps(parts: list) -> RegimeMap:

@@ -1,10 +1,13 @@
-"""Bifurcation sweeps and regime maps on a Dask cluster (optional extra ``dask``).
+"""Bifurcation sweeps, regime maps and basins on a Dask cluster (optional extra ``dask``).
 
 The parameter grid is cut into chunks; each chunk is one task that runs the ordinary
 local sweep on one thread (``impactlib.bifurcation(..., workers=1)`` for a block of
 values, ``impactlib.regime_map(..., workers=1)`` for a block of rows), and the chunks are
 put back together in order.  Every value is an independent run (or, with warm start, one
-sequential continuation per direction), so the result is the local run's, row for row::
+sequential continuation per direction), so the result is the local run's, row for row.
+Basins run the local driver (:func:`impactlib.iter_basins`) with its blocks of rows sent
+to the cluster instead of the thread pool; the attractors are told apart on the caller's
+side, block after block in row order, as locally::
 
     from dask.distributed import Client
     from impactlib import distributed as ild
@@ -12,6 +15,7 @@ sequential continuation per direction), so the result is the local run's, row fo
     with Client("tcp://scheduler:8786") as client:
         bif = ild.bifurcation(client, il.Params(), "omega", np.linspace(0.1, 5, 100_000))
         rmap = ild.regime_map(client, il.Params(), "omega", wx, "r", wy)
+        bas = ild.basins(client, il.Params(omega=2.62), (0, 1), (-1, 1), n=(200, 200))
 
 Nothing here imports dask: the caller brings a ``distributed.Client`` (install with
 ``pip install impact-explorer[dask]``), so ``impactlib`` works without the extra.  Each
@@ -20,13 +24,15 @@ worker process.
 """
 from __future__ import annotations
 
+import collections
 import dataclasses
 import math
 import time
 
 import numpy as np
 
-from ..model import Params
+from ..analysis import basins as _basins
+from ..model import Params, RunLimits
 from .diagrams import (CAP_PER_VALUE, Bifurcation, RegimeMap, _check_sweep, merge_parts,
                      _values_array, sweep_options, bifurcation as _local_bifurcation,
                      regime_map as _local_regime_map)
@@ -166,8 +172,19 @@ def regime_map(client, p: Params, name_x: str, values_x, name_y: str, values_y,
     RegimeMap
         Identical to the local map; ``elapsed`` is the caller's wall time.
     """
+    kwargs = dict(t_end=t_end, t_record=t_record, method=method, x0=x0, v0=v0, dt=dt,
+                  rtol=rtol, atol=atol, max_impacts=max_impacts, max_steps=max_steps)
+    vx, vy = _check_map(client, p, name_x, values_x, name_y, values_y, rows_per_task, kwargs)
+    tic = time.perf_counter()
+    size = int(rows_per_task) if rows_per_task else _default_chunk(client, vy.size, 1)
+    return _map_of_blocks(p, name_x, vx, name_y, vy, kwargs, tic,
+                          list(_regime_blocks(client, p, name_x, vx, name_y, vy, kwargs, size)))
+
+
+def _check_map(client, p, name_x, values_x, name_y, values_y, rows_per_task, kwargs):
     _check_client(client)
-    _check_sweep(p, [name_x, name_y], t_end, t_record, x0, v0, method, dt, rtol, atol)
+    _check_sweep(p, [name_x, name_y], kwargs["t_end"], kwargs["t_record"], kwargs["x0"],
+                 kwargs["v0"], kwargs["method"], kwargs["dt"], kwargs["rtol"], kwargs["atol"])
     if name_x == name_y:
         raise ValueError(f"name_x and name_y are both {name_x!r}")
     vx = _values_array(name_x, values_x)
@@ -176,24 +193,149 @@ def regime_map(client, p: Params, name_x: str, values_x, name_y: str, values_y,
                                       or int(rows_per_task) != rows_per_task
                                       or rows_per_task < 1):
         raise ValueError(f"rows_per_task={rows_per_task!r} must be a whole number >= 1")
-    kwargs = dict(t_end=t_end, t_record=t_record, method=method, x0=x0, v0=v0, dt=dt,
-                  rtol=rtol, atol=atol, max_impacts=max_impacts, max_steps=max_steps)
-    tic = time.perf_counter()
-    size = int(rows_per_task) if rows_per_task else _default_chunk(client, vy.size, 1)
+    return vx, vy
+
+
+def _regime_blocks(client, p, name_x, vx, name_y, vy, kwargs, size):
+    """((a, b), block) for the row blocks [a, b) of the map, in order, all submitted at
+    once; closing the generator cancels the blocks not returned yet."""
     edges = _edges(vy.size, size)
     n = len(edges)
-    futs = client.map(_regime_task, [p] * n, [name_x] * n, [vx] * n, [name_y] * n,
-                      [vy[a:b] for a, b in edges], [kwargs] * n, pure=False)
-    blocks = client.gather(futs)
-    impacts = np.concatenate([b[0] for b in blocks])
-    period = np.concatenate([b[1] for b in blocks])
-    status = np.concatenate([b[2] for b in blocks])
-    motions = {(iy + a, ix): mo
-               for (a, _), b in zip(edges, blocks) for (iy, ix), mo in b[3].items()}
+    futs = collections.deque(client.map(_regime_task, [p] * n, [name_x] * n, [vx] * n,
+                                        [name_y] * n, [vy[a:b] for a, b in edges],
+                                        [kwargs] * n, pure=False))
+    try:
+        for edge in edges:
+            yield edge, futs.popleft().result()
+    finally:
+        if futs:
+            client.cancel(list(futs))
+
+
+def _map_of_blocks(p, name_x, vx, name_y, vy, kwargs, tic, blocks) -> RegimeMap:
+    """The RegimeMap of rows vy from their blocks ((a, b), (impacts, period, status,
+    motions)) (row a of vy first)."""
+    a0 = blocks[0][0][0]
+    impacts = np.concatenate([b[0] for _, b in blocks])
+    period = np.concatenate([b[1] for _, b in blocks])
+    status = np.concatenate([b[2] for _, b in blocks])
+    motions = {(iy + a - a0, ix): mo
+               for (a, _), b in blocks for (iy, ix), mo in b[3].items()}
+    opts = {k: kwargs[k] for k in ("t_end", "t_record", "method", "x0", "v0", "dt", "rtol",
+                                   "atol")}
     return RegimeMap(name_x, vx, name_y, vy, impacts, period, status,
                      time.perf_counter() - tic, motions, params=p,
-                     options=sweep_options(t_end=t_end, t_record=t_record, method=method,
-                                           x0=x0, v0=v0, dt=dt, rtol=rtol, atol=atol))
+                     options=sweep_options(**opts))
 
 
-__all__ = ["bifurcation", "regime_map"]
+def iter_regime_map(client, p: Params, name_x: str, values_x, name_y: str, values_y,
+                    t_end: float = 500.0, t_record: float = 250.0, method: str = "exact", *,
+                    rows_per_task: int | None = None, x0: float | None = None,
+                    v0: float = 0.0, dt: float | None = None, rtol: float = 1e-6,
+                    atol: float = 1e-9, max_impacts: int = 1_000_000,
+                    max_steps: int = 20_000_000):
+    """:func:`impactlib.iter_regime_map` on a cluster: every block of ``rows_per_task``
+    rows is submitted at once and the blocks' RegimeMaps are yielded in row order as they
+    finish (``impactlib.sweeps.diagrams.merge_regime_maps`` joins them into the local
+    map).  Stop
+    iterating (or ``close()``) to cancel the blocks still on the cluster.  Validation
+    happens here, before anything is sent.  Other parameters as :func:`regime_map`."""
+    kwargs = dict(t_end=t_end, t_record=t_record, method=method, x0=x0, v0=v0, dt=dt,
+                  rtol=rtol, atol=atol, max_impacts=max_impacts, max_steps=max_steps)
+    vx, vy = _check_map(client, p, name_x, values_x, name_y, values_y, rows_per_task, kwargs)
+    size = int(rows_per_task) if rows_per_task else _default_chunk(client, vy.size, 1)
+
+    def stream():
+        blocks = _regime_blocks(client, p, name_x, vx, name_y, vy, kwargs, size)
+        tic = time.perf_counter()      # a block's elapsed: the wait for it
+        try:
+            for (a, b), block in blocks:
+                yield _map_of_blocks(p, name_x, vx, name_y, vy[a:b], kwargs, tic,
+                                     [((a, b), block)])
+                tic = time.perf_counter()
+        finally:
+            blocks.close()
+    return stream()
+
+
+
+# ---------------------------------------------------------------- basins
+
+
+class _KnownChaos:
+    """What a basins block reads of the caller's attractor registry, sent to a worker:
+    the chaotic attractors' boxes known when the block was handed out (a start that
+    fills one stops early)."""
+
+    def __init__(self, chaos_boxes):
+        self.chaos_boxes = chaos_boxes
+
+
+def _cluster_tasks(client, ahead: int):
+    """A ``tasks(fn, args_list)`` for the basins driver: at most ``ahead`` blocks on the
+    cluster at a time, results in order; closing it cancels the blocks not returned."""
+    def tasks(fn, args_list):
+        pending = collections.deque()
+        todo = iter(args_list)
+        try:
+            while True:
+                while len(pending) < ahead:
+                    args = next(todo, None)
+                    if args is None:
+                        break
+                    reg, *rest = args
+                    pending.append(client.submit(fn, _KnownChaos(reg.chaos_boxes), *rest,
+                                                 pure=False))
+                if not pending:
+                    return
+                yield pending.popleft().result()
+        finally:
+            if pending:
+                client.cancel(list(pending))
+    return tasks
+
+
+def iter_basins(client, p: Params, x_range, v_range, n=(100, 100), phase: float = 0.0, *,
+                max_periods: int = 1000, n_window: int = 128,
+                rows_per_block: int | None = None, time_limit: float | None = None,
+                limits: RunLimits = RunLimits()):
+    """:func:`impactlib.iter_basins` with the blocks of rows computed on a cluster.
+
+    Yields the same :class:`~impactlib.analysis.basins.BasinRows` as the local stream, in
+    row order; stop iterating (or ``close()``) to cancel the blocks still on the cluster.
+    At most two blocks per worker thread are on the cluster at a time (as the local run
+    keeps its pool busy).  Arguments as :func:`impactlib.basins`; validation happens here,
+    before anything is sent.
+    """
+    _check_client(client)
+    xr, vr, (nx, nv), phase = _basins._check(p, x_range, v_range, n, phase, max_periods,
+                                             n_window, time_limit)
+    return _basins._iter(p, xr, vr, nx, nv, phase, max_periods, n_window, rows_per_block,
+                         None, time_limit, limits,
+                         tasks=_cluster_tasks(client, 2 * _thread_count(client)))
+
+
+def basins(client, p: Params, x_range, v_range, n=(100, 100), phase: float = 0.0, *,
+           max_periods: int = 1000, n_window: int = 128, time_limit: float | None = None,
+           limits: RunLimits = RunLimits()) -> "_basins.Basins":
+    """:func:`impactlib.basins` with the grid's blocks of rows computed on a cluster.
+
+    Returns
+    -------
+    Basins
+        Equal (``==``: labels, attractors, work per start, message) to the local result.
+        One exception, as between two local runs: where a chaotic attractor is found in
+        the middle of the grid, a start in a block already handed out follows its full
+        ``max_periods`` instead of stopping on the attractor's box; its label is the same,
+        its entry in ``periods`` larger.  ``elapsed`` is the caller's wall time.
+    """
+    _check_client(client)
+    xr, vr, (nx, nv), ph = _basins._check(p, x_range, v_range, n, phase, max_periods,
+                                          n_window, time_limit)
+    tic = time.perf_counter()
+    blocks = iter_basins(client, p, xr, vr, (nx, nv), ph, max_periods=max_periods,
+                         n_window=n_window, time_limit=time_limit, limits=limits)
+    return _basins.collect(p, xr, vr, nx, nv, ph, tic, blocks)
+
+
+__all__ = ["bifurcation", "regime_map", "iter_regime_map", "basins", "iter_basins"]

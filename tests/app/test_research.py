@@ -64,9 +64,11 @@ def test_regime_map_streams_rows_that_agree_with_single_runs(make_explorer, monk
 def test_regime_map_is_cancellable(make_explorer, monkeypatch):
     e = make_explorer(map_n="60")
     calls = []
-    real = research.il.regime_map
-    monkeypatch.setattr(research.il, "regime_map", lambda *a, **k: (calls.append(1),
-                                                                     real(*a, **k))[1])
+    # each block of the library's stream (il.iter_regime_map) is one regime_map call
+    from impactlib.sweeps import diagrams
+    real = diagrams.regime_map
+    monkeypatch.setattr(diagrams, "regime_map", lambda *a, **k: (calls.append(1),
+                                                                 real(*a, **k))[1])
     rows = e.research.rows
 
     def first_then_cancel(kind, block):

@@ -108,6 +108,25 @@ def test_iter_regime_map_pieces_make_the_map():
                                                      t_record=50)
 
 
+def test_iter_regime_map_sizes_blocks_by_a_callable():
+    vx, vy = np.linspace(1.0, 3.0, 4), np.linspace(0.3, 0.9, 7)
+    asked = []
+
+    def rows(done, elapsed):
+        asked.append((done, elapsed))
+        return 1 if done == 0 else 4               # a small first block, then larger
+    parts = list(il.iter_regime_map(P, "omega", vx, "r", vy, t_end=100, t_record=50,
+                                    rows=rows))
+    assert [p.values_y.size for p in parts] == [1, 4, 2]
+    assert [d for d, _ in asked] == [0, 1, 5]
+    assert all(b >= a >= 0 for (_, a), (_, b) in zip(asked, asked[1:]))
+    from impactlib.sweeps.diagrams import merge_regime_maps
+    assert merge_regime_maps(parts) == il.regime_map(P, "omega", vx, "r", vy, t_end=100,
+                                                     t_record=50)
+    with pytest.raises(ValueError, match="rows=0"):
+        next(il.iter_regime_map(P, "omega", vx, "r", vy, rows=0))
+
+
 def test_cancel_stops_within_one_chunk():
     values = np.linspace(1.0, 3.0, 64 * 6)
     cancel = threading.Event()

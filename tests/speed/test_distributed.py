@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 import impactlib as il
+from impactlib.sweeps.diagrams import merge_regime_maps
 
 distributed = pytest.importorskip("distributed")
 ild = pytest.importorskip("impactlib.sweeps.distributed")
@@ -115,12 +116,16 @@ def test_process_workers_match_local():
     wy = np.array([0.3, 0.6, 0.8])
     want_b = il.bifurcation(P, "omega", wx, **RUN)
     want_m = il.regime_map(P, "omega", wx, "r", wy, **RUN)
+    want_s = il.basins(il.Params(r=0.8, omega=2.62), (0.0, 1.0), (-1.0, 1.0), n=(6, 6))
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                                   **NO_DASHBOARD) as cluster, \
             distributed.Client(cluster) as c:
         got_b = ild.bifurcation(c, P, "omega", wx, chunk=5, **RUN)
         got_m = ild.regime_map(c, P, "omega", wx, "r", wy, rows_per_task=1, **RUN)
+        got_s = ild.basins(c, il.Params(r=0.8, omega=2.62), (0.0, 1.0), (-1.0, 1.0),
+                           n=(6, 6))
     assert_same_bifurcation(got_b, want_b)
+    assert got_s == want_s
     for f in ("impacts", "period", "status"):
         np.testing.assert_array_equal(getattr(got_m, f), getattr(want_m, f), err_msg=f)
 
@@ -143,3 +148,71 @@ def test_regime_map_result_equals_local(client):
     want = il.regime_map(P, "omega", vx, "r", vy, **RUN)
     got = ild.regime_map(client, P, "omega", vx, "r", vy, rows_per_task=1, **RUN)
     assert got == want and got.settings() == want.settings()
+
+
+# ---------------------------------------------------------------- basins
+
+P262 = il.Params(r=0.8, omega=2.62)       # two coexisting periodic attractors
+
+
+def test_basins_equal_local_cell_for_cell(client):
+    want = il.basins(P262, (0.0, 1.0), (-1.0, 1.0), n=(11, 11))
+    got = ild.basins(client, P262, (0.0, 1.0), (-1.0, 1.0), n=(11, 11))
+    assert len(want.attractors) >= 2 and want.complete
+    np.testing.assert_array_equal(got.labels, want.labels)
+    np.testing.assert_array_equal(got.periods, want.periods)
+    assert [a.label for a in got.attractors] == [a.label for a in want.attractors]
+    for a, b in zip(got.attractors, want.attractors):
+        np.testing.assert_array_equal(a.points, b.points)
+    assert got == want and got.message == want.message
+
+
+@pytest.mark.parametrize("rows", [1, 3])
+def test_iter_basins_streams_the_local_blocks(client, rows):
+    args = (P262, (0.0, 1.0), (-1.5, 1.5))
+    kw = dict(n=(7, 9), rows_per_block=rows)
+    want = list(il.iter_basins(*args, **kw))
+    got = list(ild.iter_basins(client, *args, **kw))
+    assert [b.start for b in got] == [b.start for b in want]
+    for g, w in zip(got, want):
+        np.testing.assert_array_equal(g.labels, w.labels)
+        np.testing.assert_array_equal(g.periods, w.periods)
+        assert (g.rows_done, g.rows_total, g.message) == (w.rows_done, w.rows_total, w.message)
+
+
+def test_basins_on_a_chaotic_attractor_label_every_cell_alike(client):
+    """omega = 2.8 (the paper's Fig. 6): one chaotic attractor, found by the probes before
+    any block starts, so the work per start matches as well."""
+    want = il.basins(il.Params(omega=2.8), (0.0, 1.0), (-1.0, 1.0), n=(4, 4))
+    got = ild.basins(client, il.Params(omega=2.8), (0.0, 1.0), (-1.0, 1.0), n=(4, 4))
+    assert [a.kind for a in want.attractors] == ["chaotic"]
+    np.testing.assert_array_equal(got.labels, want.labels)
+    np.testing.assert_array_equal(got.periods, want.periods)
+
+
+def test_basins_bad_arguments_fail_before_submitting(client):
+    with pytest.raises(ValueError, match="x_range"):
+        ild.basins(client, P262, (0.0, -1.0), (-1.0, 1.0), n=(3, 3))
+    with pytest.raises(ValueError, match="n="):
+        ild.iter_basins(client, P262, (0.0, 1.0), (-1.0, 1.0), n=(0, 3))
+    with pytest.raises(TypeError, match="Client"):
+        ild.basins(object(), P262, (0.0, 1.0), (-1.0, 1.0))
+
+
+
+@pytest.mark.parametrize("rows", [None, 2])
+def test_iter_regime_map_blocks_make_the_local_map(client, rows):
+    vx, vy = np.linspace(0.5, 4.5, 7), np.linspace(0.1, 0.9, 5)
+    want = il.regime_map(P, "omega", vx, "r", vy, **RUN)
+    parts = list(ild.iter_regime_map(client, P, "omega", vx, "r", vy, rows_per_task=rows,
+                                     **RUN))
+    if rows == 2:
+        assert [rm.values_y.size for rm in parts] == [2, 2, 1]
+    assert merge_regime_maps(parts) == want
+
+
+def test_iter_regime_map_validates_before_submitting(client):
+    with pytest.raises(ValueError, match="both 'r'"):
+        ild.iter_regime_map(client, P, "r", [0.5], "r", [0.5], **RUN)
+    with pytest.raises(ValueError, match="rows_per_task"):
+        ild.iter_regime_map(client, P, "omega", [1.0], "r", [0.5], rows_per_task=0, **RUN)
