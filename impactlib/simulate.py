@@ -71,7 +71,8 @@ class Solution(Result):
     sticking : ndarray, shape (k, 2)
         [start, release] times (s) of each interval at rest on the wall, clipped to the window.
     dense : Samples or None
-        ``dense`` evenly spaced samples (t, x, v) of the window; None if not asked for.
+        Samples (t, x, v) at the ``dense`` times (evenly spaced when ``dense`` is a
+        number); None if not asked for.
     status : int
         0 reached t_end; 1 impact limit; 2 step limit; 3 output full (see ``message``).
     message : str
@@ -190,8 +191,9 @@ def simulate(p: Params, t_end: float = 500.0, x0: float | None = None, v0: float
     method : {"exact", "rk4", "rk45"}
         Closed form with guaranteed impact search, fixed-step RK4 (needs ``dt``), or
         adaptive Dormand-Prince (``rtol``, ``atol``).
-    dense : int
-        Number of evenly spaced samples of (x, v) on [t_record, t_end]; 0 for none.
+    dense : int or array_like
+        Number of evenly spaced samples of (x, v) on [t_record, t_end] (0 for none), or
+        the sample times themselves: 1-D, ascending, inside [t_record, t_end].
     max_impacts, max_steps : int
         Work ceilings; reaching one ends the run with ``status`` > 0 and partial results.
 
@@ -209,7 +211,10 @@ def simulate(p: Params, t_end: float = 500.0, x0: float | None = None, v0: float
                                max_steps)
     res = np.empty(E.NRES)
     period = 2.0 * math.pi / p.omega
-    d_t = np.linspace(t_record, t_end, dense) if dense else _NO_SAMPLES
+    if isinstance(dense, (int, np.integer)):
+        d_t = np.linspace(t_record, t_end, dense) if dense else _NO_SAMPLES
+    else:
+        d_t = np.array(dense, dtype=float)
     n_pc, n_d = pc_t.shape[0], d_t.shape[0]
     n_periods = int((t_end - t_record) / period) + 2
     cap = min(max(1024, 8 * n_periods), max_impacts)
@@ -247,7 +252,7 @@ def simulate(p: Params, t_end: float = 500.0, x0: float | None = None, v0: float
     k = n_pc - int(np.count_nonzero(np.isnan(pc_x)))
     poincare = _built(Samples, t=pc_t[:k], x=pc_x[:k], v=pc_v[:k])
     dense_out = None
-    if dense:
+    if d_t is not _NO_SAMPLES:
         k = n_d - int(np.count_nonzero(np.isnan(d_x)))
         dense_out = _built(Samples, t=d_t[:k], x=d_x[:k], v=d_v[:k])
     message = RUN_MESSAGES[status]
