@@ -150,6 +150,7 @@ def run_constants(p: Params):
 
 
 _NO_SAMPLES = np.empty(0)
+_STATUS = {int(s): s for s in RunStatus}
 _NO_LOGS = np.empty((0, 2))
 
 
@@ -240,9 +241,10 @@ def simulate(p: Params, t_end: float = 500.0, x0: float | None = None, v0: float
             cap = min(max_impacts, max(2 * cap, n_rec))
             continue
         break
-    status = RunStatus(int(res[E.STATUS]))
-    n_stick = int(res[E.N_STICK])
-    tf, xf, vf, stuck = res[E.T_F], res[E.X_F], res[E.V_F], res[E.STUCK] != 0.0
+    out = res.tolist()          # Python numbers: one conversion, not one per field
+    status = _STATUS[int(out[E.STATUS])]
+    n_stick = int(out[E.N_STICK])
+    tf, xf, vf, stuck = out[E.T_F], out[E.X_F], out[E.V_F], out[E.STUCK] != 0.0
     # the outputs are views of the one buffer (its size is bounded by the window)
     n_keep = min(n_rec, cap)
     it = imp_t[:n_keep]
@@ -261,7 +263,7 @@ def simulate(p: Params, t_end: float = 500.0, x0: float | None = None, v0: float
     return _built(Solution, params=p, method=method, t_end=t_end, t_record=t_record, phase=phase,
                   impacts=impacts, poincare=poincare, sticking=stick[:n_stick],
                   dense=dense_out, status=status, message=message,
-                  final=(float(tf), float(xf), float(vf), bool(stuck)),
-                  n_impacts=int(res[E.N_TOT]), n_chatter=int(res[E.N_TAIL]),
-                  nsteps=int(res[E.NSTEPS]), elapsed=elapsed,
+                  final=(tf, xf, vf, stuck),
+                  n_impacts=int(out[E.N_TOT]), n_chatter=int(out[E.N_TAIL]),
+                  nsteps=int(out[E.NSTEPS]), elapsed=elapsed,
                   options=_options(method, x0, v0, t0, dt, rtol, atol))
