@@ -91,9 +91,11 @@ def _scene_grid(t_record: float, t_end: float, period: float) -> SceneGrid:
     start = max(t_record, t_end - FIRST_PERIODS * period)
     even = np.linspace(t_record, t_end, SCENE_POINTS)
     spacing = (t_end - t_record) / (SCENE_POINTS - 1)
-    n = max(window_samples(period, start, t_end, FIRST_PIXELS),
-            math.ceil((t_end - start) / spacing) + 1)
-    stride = max(1, int((n - 1) * spacing / (t_end - start))) if t_end > start else 1
+    n = window_samples(period, start, t_end, FIRST_PIXELS)
+    stride = 1
+    if t_end > start:           # (the app's settings keep t_record < t_end)
+        n = max(n, math.ceil((t_end - start) / spacing) + 1)
+        stride = max(1, int((n - 1) * spacing / (t_end - start)))
     times = np.concatenate([even[even < start], np.linspace(start, t_end, n)])
     times.flags.writeable = False       # shared by every caller of the cache
     return SceneGrid(times, int(np.count_nonzero(even < start)), stride)
