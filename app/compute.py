@@ -6,6 +6,8 @@ the run options, bounded (LRU). Everything here is plain numpy; no widgets.
 from __future__ import annotations
 
 import dataclasses
+import functools
+import math
 import threading
 import weakref
 
@@ -25,7 +27,7 @@ MAX_CORNERS = 2000
 MAX_STICKING = 2000
 #: At most this many points in the impact map and the Poincare map.
 MAX_MAP_POINTS = 20_000
-#: Ceilings of one scene simulation (a scene is two): reaching one stops the run with
+#: Ceilings of one scene simulation: reaching one stops the run with
 #: partial results and a message on the badge. Measured worst costs on this 2-core
 #: machine: ~1.5 us per exact step (heavily damped), ~9 us per impact, ~0.05 us per rk4
 #: step, so each simulation stays under ~0.4 s. The paper's scenes need <= 11k exact
@@ -47,10 +49,80 @@ def scene_limits(method: str) -> il.RunLimits:
                         max_samples=SCENE_MAX_SAMPLES)
 
 
+#: The time plot opens on the last FIRST_PERIODS forcing periods of the window. The
+#: scene's run samples that window for a plot up to FIRST_PIXELS wide as well (besides
+#: its SCENE_POINTS even samples), so the plot's first window needs no run of its own.
+#: A scene view is 233-467 px wide in the layouts measured (docs/guide/teaching.md), and
+#: 1000 is the width the plot assumes before it is first drawn.
+FIRST_PERIODS = 8
+FIRST_PIXELS = 1000
+
+
+def first_window(run: Run) -> tuple[float, float]:
+    """[start, end] of the time plot when a scene is first shown."""
+    return max(run.t_record, run.t_end - FIRST_PERIODS * run.params.T), run.t_end
+
+
+def window_samples(period: float, start: float, end: float, pixels: int) -> int:
+    """Samples the time plot needs on [start, end] for a plot ``pixels`` wide."""
+    return int(max(SAMPLES_PER_PERIOD * (end - start) / period, 2 * pixels))
+
+
+@dataclasses.dataclass(frozen=True)
+class SceneGrid:
+    """The dense sample times of a scene run: the even grid of SCENE_POINTS samples up to
+    the time plot's first window, then the window's finer even grid. The scene views
+    take every ``stride``-th window sample (as dense as the even grid), the time plot
+    takes the window's (thinned to its width)."""
+
+    times: np.ndarray
+    first: int        # samples before the window
+    stride: int
+
+
+def scene_grid(key: tuple) -> SceneGrid:
+    """The :class:`SceneGrid` of the scene run of ``key`` (Run.scene_key())."""
+    options = dict(key[1:])
+    return _scene_grid(float(options["t_record"]), float(options["t_end"]), key[0].T)
+
+
+@functools.lru_cache(maxsize=64)
+def _scene_grid(t_record: float, t_end: float, period: float) -> SceneGrid:
+    start = max(t_record, t_end - FIRST_PERIODS * period)
+    even = np.linspace(t_record, t_end, SCENE_POINTS)
+    spacing = (t_end - t_record) / (SCENE_POINTS - 1)
+    n = window_samples(period, start, t_end, FIRST_PIXELS)
+    stride = 1
+    if t_end > start:           # (the app's settings keep t_record < t_end)
+        n = max(n, math.ceil((t_end - start) / spacing) + 1)
+        stride = max(1, int((n - 1) * spacing / (t_end - start)))
+    times = np.concatenate([even[even < start], np.linspace(start, t_end, n)])
+    times.flags.writeable = False       # shared by every caller of the cache
+    return SceneGrid(times, int(np.count_nonzero(even < start)), stride)
+
+
+def scene_samples(sol: il.Solution, grid: SceneGrid) -> tuple:
+    """(t, x, v) of the scene views from the scene run ``sol`` on ``grid``."""
+    d, k, s = sol.dense, grid.first, grid.stride
+    last = d.t.size - 1
+    tail = [last] if last >= k and (last - k) % s else []
+    return tuple(np.concatenate([a[:k], a[k::s], a[tail]]) for a in (d.t, d.x, d.v))
+
+
+def window_samples_of(sol: il.Solution, grid: SceneGrid, need: int) -> tuple:
+    """(t, x, v) of the time plot's first window from the scene run ``sol`` on ``grid``:
+    its window samples, every s-th so that at least ``need`` remain."""
+    d, k = sol.dense, grid.first
+    n = d.t.size - k
+    s = max(1, (n - 1) // max(need - 1, 1))
+    tail = [d.t.size - 1] if n > 0 and (n - 1) % s else []
+    return tuple(np.concatenate([a[k::s], a[tail]]) for a in (d.t, d.x, d.v))
+
+
 @pn.cache(max_items=32, policy="LRU", hash_funcs=_HASH)
-def _simulate(key: tuple, dense: int, phase: float) -> il.Solution:
+def _simulate(key: tuple, scene: bool, phase: float) -> il.Solution:
     params, options = key[0], dict(key[1:])
-    return il.simulate(params, dense=dense, phase=phase,
+    return il.simulate(params, dense=scene_grid(key).times if scene else 0, phase=phase,
                        limits=scene_limits(options["method"]), **options)
 
 
@@ -77,11 +149,13 @@ def once_at_a_time(key, fn):
                 _FLIGHTS[key] = (lock, users - 1)
 
 
-def simulate(key: tuple, dense: int, phase: float) -> il.Solution:
-    """``il.simulate`` for ``Run.scene_key()`` (Params, then (keyword, value) pairs);
-    cached across sessions. Callers asking for the same run at once (the scene job and
-    the stability job of one move) wait for one simulation instead of running two."""
-    return once_at_a_time(("run", repr(key), dense, phase), lambda: _simulate(key, dense, phase))
+def simulate(key: tuple, scene: bool, phase: float) -> il.Solution:
+    """``il.simulate`` for ``Run.scene_key()`` (Params, then (keyword, value) pairs) with
+    the Poincare section at ``phase``, and the scene's dense samples (:func:`scene_grid`)
+    if ``scene``; cached across sessions. Callers asking for the same run at once (the
+    scene, stability and window jobs of one move) wait for one simulation instead of
+    running three."""
+    return once_at_a_time(("run", repr(key), scene, phase), lambda: _simulate(key, scene, phase))
 
 
 _MEASURED: dict = {}
@@ -109,13 +183,13 @@ def section_phase(run: Run) -> float:
 def scene_solution(run: Run) -> il.Solution:
     """The one run of a scene: dense samples for the four scene views and the Poincare
     section at psi in the same pass."""
-    return simulate(run.scene_key(), SCENE_POINTS, section_phase(run))
+    return simulate(run.scene_key(), True, section_phase(run))
 
 
 def section_solution(run: Run) -> il.Solution:
     """The same run sampled at another Poincare section psi: an impacts-only simulation
     (no dense output), so a psi change alone never recomputes the trajectory."""
-    return simulate(run.scene_key(), 0, section_phase(run))
+    return simulate(run.scene_key(), False, section_phase(run))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -132,15 +206,21 @@ class SceneData:
     message: str
 
 
-def trajectory_columns(sol: il.Solution, r: float, g: float) -> dict:
-    """Dense samples merged with the impacts: at each impact time the line passes through
-    (g, v-) and (g, -r v-), so corners and velocity jumps are drawn exactly."""
+def trajectory_columns(sol: il.Solution, r: float, g: float, samples=None,
+                       span=(-np.inf, np.inf)) -> dict:
+    """Dense samples ((t, x, v), default all of ``sol``'s) merged with the impacts in
+    ``span``: at each impact time the line passes through (g, v-) and (g, -r v-), so
+    corners and velocity jumps are drawn exactly."""
     d = sol.dense
-    t = np.asarray(d.t, dtype=float)
-    x = np.asarray(d.x, dtype=float)
-    v = np.asarray(d.v, dtype=float)
+    t, x, v = (d.t, d.x, d.v) if samples is None else samples
+    t = np.asarray(t, dtype=float)
+    x = np.asarray(x, dtype=float)
+    v = np.asarray(v, dtype=float)
     ti = np.asarray(sol.impacts.t, dtype=float)
     vi = np.asarray(sol.impacts.v, dtype=float)
+    if span[0] > -np.inf or span[1] < np.inf:
+        inside = (ti >= span[0]) & (ti <= span[1])
+        ti, vi = ti[inside], vi[inside]
     if ti.size > MAX_CORNERS:
         keep = np.linspace(0, ti.size - 1, MAX_CORNERS).round().astype(int)
         ti, vi = ti[keep], vi[keep]
@@ -176,7 +256,9 @@ def window_columns(run: Run, start: float, end: float, pixels: int) -> dict:
     pixels = int(min(max(pixels or 1000, 200), 4000))
     if not b > a:
         return {"t": np.zeros(0), "x": np.zeros(0), "v": np.zeros(0)}
-    n = int(max(SAMPLES_PER_PERIOD * (b - a) / p.T, 2 * pixels))
+    if (a, b) == first_window(run) and pixels <= FIRST_PIXELS:
+        return first_window_columns(run, pixels)
+    n = window_samples(p.T, a, b, pixels)
     options = {**dict(run.scene_key()[1:]), "t_end": b, "t_record": a}
     envelope = n > MAX_WINDOW_SAMPLES
     sol = il.simulate(p, dense=min(n, ENVELOPE_SAMPLES),
@@ -194,6 +276,16 @@ def window_columns(run: Run, start: float, end: float, pixels: int) -> dict:
             "v": np.full(2 * tc.size, np.nan)}
 
 
+def first_window_columns(run: Run, pixels: int) -> dict:
+    """The time plot's first window from the scene's own run (its samples there, thinned
+    evenly to what a plot ``pixels`` wide needs, and its impacts there as corners)."""
+    sol = scene_solution(run)
+    a, b = first_window(run)
+    samples = window_samples_of(sol, scene_grid(run.scene_key()),
+                                window_samples(run.params.T, a, b, pixels))
+    return trajectory_columns(sol, run.params.r, run.params.g, samples, (a, b))
+
+
 def last(a, n: int) -> np.ndarray:
     a = np.asarray(a, dtype=float)
     return a[-n:] if a.size > n else a
@@ -209,7 +301,9 @@ def build_scene(run: Run) -> SceneData:
     impacts = {"t": last(imp.t, MAX_MAP_POINTS), "phase": last(imp.phase, MAX_MAP_POINTS),
                "v": v, "v_after": -p.r * v}
     stick = np.asarray(sol.sticking, dtype=float).reshape(-1, 2)[-MAX_STICKING:]
-    return SceneData(run=run, trajectory=trajectory_columns(sol, p.r, p.g), impacts=impacts,
+    samples = scene_samples(sol, scene_grid(run.scene_key()))
+    return SceneData(run=run, trajectory=trajectory_columns(sol, p.r, p.g, samples),
+                     impacts=impacts,
                  sticking={"start": stick[:, 0].copy(), "end": stick[:, 1].copy()},
                  label=classified(sol)[0].label, elapsed=float(sol.elapsed),
                  status=int(sol.status), message=str(sol.message))

@@ -105,7 +105,7 @@ def exact_run(key: tuple, source) -> il.Solution:
     computed by the exact method (``source`` = its (scene key, section phase)), else a
     run of its own with the section at t = 0."""
     if source is not None:
-        return compute.simulate(source[0], compute.SCENE_POINTS, source[1])
+        return compute.simulate(source[0], True, source[1])
     p, x0, v0, t_end, t_record = key
     return il.simulate(p, t_end=t_end, t_record=t_record, x0=x0, v0=v0, phase=0.0,
                        limits=compute.scene_limits("exact"))

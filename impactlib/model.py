@@ -198,6 +198,27 @@ def rk4_stability_limit(p: Params) -> float:
     return float(rk4_stability_limits(p.m, p.c, p.k))
 
 
+def _dense_count(dense, problems: list) -> int:
+    """How many dense samples ``dense`` asks for: a whole number >= 0 (evenly spaced), or
+    a 1-D array of finite, ascending sample times (its window is checked by the caller)."""
+    if isinstance(dense, (int, np.integer)) and not isinstance(dense, bool):
+        if dense >= 0:
+            return int(dense)
+    elif isinstance(dense, (np.ndarray, list, tuple)):
+        times = np.asarray(dense)
+        if (times.ndim == 1 and times.dtype.kind in "if" and np.all(np.isfinite(times))
+                and np.all(np.diff(times) >= 0)):
+            return times.size
+    problems.append(f"dense={_short_repr(dense)} must be a whole number >= 0 or a 1-D array "
+                    "of finite sample times in ascending order")
+    return 0
+
+
+def _short_repr(value) -> str:
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
 def check_run(p: Params, *, t_end, t_record, x0, v0, phase, method, dt, rtol, atol,
               dense, limits: RunLimits) -> tuple:
     """Validate a run's settings; return them as floats. One ValueError names every bad field."""
@@ -225,8 +246,7 @@ def check_run(p: Params, *, t_end, t_record, x0, v0, phase, method, dt, rtol, at
         problems.append(f"x0={x0!r} is behind the endstop g={p.g!r} (need x0 >= g)")
     if math.isfinite(phase) and not (0.0 <= phase <= p.T):
         problems.append(f"phase={phase!r} must lie in [0, T={p.T!r}] (time units)")
-    if isinstance(dense, bool) or not isinstance(dense, (int, np.integer)) or dense < 0:
-        problems.append(f"dense={dense!r} must be a whole number >= 0")
+    n_dense = _dense_count(dense, problems)
     if method == "rk4":
         if dt is None:
             problems.append("dt is required for method='rk4'")
@@ -246,14 +266,19 @@ def check_run(p: Params, *, t_end, t_record, x0, v0, phase, method, dt, rtol, at
             problems.append(f"rtol={rtol!r} must lie in [1e-14, 1)")
         if math.isfinite(atol) and not (0 < atol < 1):
             problems.append(f"atol={atol!r} must lie in (0, 1)")
+    if not problems and not isinstance(dense, (int, np.integer)):
+        times = np.asarray(dense)
+        if times.size and not (t_record <= times[0] and times[-1] <= t_end):
+            problems.append(f"dense: sample times [{float(times[0])!r} ... {float(times[-1])!r}] must lie "
+                            f"in the window [t_record, t_end] = [{t_record!r}, {t_end!r}]")
     if not problems:
         n_sec = (t_end - t_record) / p.T + 2
-        n_samples = n_sec + (dense if isinstance(dense, (int, np.integer)) else 0)
+        n_samples = n_sec + n_dense
         if n_samples > limits.max_samples:
             problems.append(
                 f"the window [t_record, t_end] = [{t_record!r}, {t_end!r}] holds {n_sec:.3g} forcing "
-                f"periods at omega={p.omega!r}; with dense={dense} that is over the limit of "
-                f"{limits.max_samples} samples")
+                f"periods at omega={p.omega!r}; with {n_dense} dense samples that is over the "
+                f"limit of {limits.max_samples} samples")
     if problems:
         raise ValueError("invalid run: " + "; ".join(problems))
     return t_end, t_record, x0, v0, phase, dt, rtol, atol

@@ -71,7 +71,8 @@ class Solution(Result):
     sticking : ndarray, shape (k, 2)
         [start, release] times (s) of each interval at rest on the wall, clipped to the window.
     dense : Samples or None
-        ``dense`` evenly spaced samples (t, x, v) of the window; None if not asked for.
+        Samples (t, x, v) at the ``dense`` times (evenly spaced when ``dense`` is a
+        number); None if not asked for.
     status : int
         0 reached t_end; 1 impact limit; 2 step limit; 3 output full (see ``message``).
     message : str
@@ -149,6 +150,7 @@ def run_constants(p: Params):
 
 
 _NO_SAMPLES = np.empty(0)
+_STATUS = {int(s): s for s in RunStatus}
 _NO_LOGS = np.empty((0, 2))
 
 
@@ -190,8 +192,9 @@ def simulate(p: Params, t_end: float = 500.0, x0: float | None = None, v0: float
     method : {"exact", "rk4", "rk45"}
         Closed form with guaranteed impact search, fixed-step RK4 (needs ``dt``), or
         adaptive Dormand-Prince (``rtol``, ``atol``).
-    dense : int
-        Number of evenly spaced samples of (x, v) on [t_record, t_end]; 0 for none.
+    dense : int or array_like
+        Number of evenly spaced samples of (x, v) on [t_record, t_end] (0 for none), or
+        the sample times themselves: 1-D, ascending, inside [t_record, t_end].
     max_impacts, max_steps : int
         Work ceilings; reaching one ends the run with ``status`` > 0 and partial results.
 
@@ -209,7 +212,10 @@ def simulate(p: Params, t_end: float = 500.0, x0: float | None = None, v0: float
                                max_steps)
     res = np.empty(E.NRES)
     period = 2.0 * math.pi / p.omega
-    d_t = np.linspace(t_record, t_end, dense) if dense else _NO_SAMPLES
+    if isinstance(dense, (int, np.integer)):
+        d_t = np.linspace(t_record, t_end, dense) if dense else _NO_SAMPLES
+    else:
+        d_t = np.array(dense, dtype=float)
     n_pc, n_d = pc_t.shape[0], d_t.shape[0]
     n_periods = int((t_end - t_record) / period) + 2
     cap = min(max(1024, 8 * n_periods), max_impacts)
@@ -235,9 +241,10 @@ def simulate(p: Params, t_end: float = 500.0, x0: float | None = None, v0: float
             cap = min(max_impacts, max(2 * cap, n_rec))
             continue
         break
-    status = RunStatus(int(res[E.STATUS]))
-    n_stick = int(res[E.N_STICK])
-    tf, xf, vf, stuck = res[E.T_F], res[E.X_F], res[E.V_F], res[E.STUCK] != 0.0
+    out = res.tolist()          # Python numbers: one conversion, not one per field
+    status = _STATUS[int(out[E.STATUS])]
+    n_stick = int(out[E.N_STICK])
+    tf, xf, vf, stuck = out[E.T_F], out[E.X_F], out[E.V_F], out[E.STUCK] != 0.0
     # the outputs are views of the one buffer (its size is bounded by the window)
     n_keep = min(n_rec, cap)
     it = imp_t[:n_keep]
@@ -247,7 +254,7 @@ def simulate(p: Params, t_end: float = 500.0, x0: float | None = None, v0: float
     k = n_pc - int(np.count_nonzero(np.isnan(pc_x)))
     poincare = _built(Samples, t=pc_t[:k], x=pc_x[:k], v=pc_v[:k])
     dense_out = None
-    if dense:
+    if d_t is not _NO_SAMPLES:
         k = n_d - int(np.count_nonzero(np.isnan(d_x)))
         dense_out = _built(Samples, t=d_t[:k], x=d_x[:k], v=d_v[:k])
     message = RUN_MESSAGES[status]
@@ -256,7 +263,7 @@ def simulate(p: Params, t_end: float = 500.0, x0: float | None = None, v0: float
     return _built(Solution, params=p, method=method, t_end=t_end, t_record=t_record, phase=phase,
                   impacts=impacts, poincare=poincare, sticking=stick[:n_stick],
                   dense=dense_out, status=status, message=message,
-                  final=(float(tf), float(xf), float(vf), bool(stuck)),
-                  n_impacts=int(res[E.N_TOT]), n_chatter=int(res[E.N_TAIL]),
-                  nsteps=int(res[E.NSTEPS]), elapsed=elapsed,
+                  final=(tf, xf, vf, stuck),
+                  n_impacts=int(out[E.N_TOT]), n_chatter=int(out[E.N_TAIL]),
+                  nsteps=int(out[E.NSTEPS]), elapsed=elapsed,
                   options=_options(method, x0, v0, t0, dt, rtol, atol))

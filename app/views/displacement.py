@@ -10,13 +10,10 @@ from bokeh.core.property.descriptors import UnsetValueError
 from bokeh.events import RangesUpdate
 from bokeh.models import ColumnDataSource, HoverTool, Range1d, Span
 
-from ..compute import SceneData
+from ..compute import SceneData, first_window
 from ._figure import (IMPACT, LINE, STICK, TIME_SERIES_TOOLS, WALL, auto_range_over,
                       make_figure)
 from .base import View
-
-#: The x axis opens on the last few periods; reset/zoom out shows the whole window.
-PERIODS_SHOWN = 8
 
 
 class DisplacementView(View):
@@ -91,7 +88,9 @@ class DisplacementView(View):
         self.sticking.data = dict(scene.sticking)
         self.wall.location = g
         self.run = run = scene.run
-        start = max(run.t_record, run.t_end - PERIODS_SHOWN * run.params.T)
+        # the x axis opens on the last few periods (sampled by the scene's own run);
+        # reset/zoom out shows the whole window
+        start = first_window(run)[0]
         self.figure.x_range.update(start=start, end=run.t_end, reset_start=start,
                                    reset_end=run.t_end)
         self.figure.title.text = "Displacement x(τ)"

@@ -153,6 +153,64 @@ def _matching_box(box, boxes, rtol):
 
 
 @jit
+def _settled_period(hx, hv, k, size, max_period, settle_tol, round_tol):
+    """(n, error bound) of the smallest period n <= max_period the section points up to
+    the k-th (ring buffers hx, hv of ``size``) have settled on, or (0, 0.0)."""
+    for n in range(1, max_period + 1):
+        if 3 * n > k:
+            break
+        e_now = _cycle_displacement(hx, hv, k, n, size, settle_tol)
+        if e_now > settle_tol:
+            continue
+        if e_now <= round_tol:
+            return n, round_tol
+        if k < 4 * n - 1:
+            continue
+        err = 0.0
+        for j in range(k - n + 1, k + 1):
+            err = max(err, _tail_error(hx, hv, j, n, size))
+        if err <= settle_tol:
+            return n, max(err, round_tol)
+    return 0, 0.0
+
+
+@jit
+def _smallest_repeat(hx, hv, k, n, size, gap_tol):
+    """The smallest divisor d of n at which the last n points repeat within ``gap_tol``:
+    a slow approach (a multiplier near -1) can pass the settling test at a multiple of
+    the true period first."""
+    for d in range(1, n):
+        if n % d != 0:
+            continue
+        ok = True
+        for j in range(k - n + 1 + d, k + 1):
+            p1 = j % size
+            p0 = (j - d) % size
+            gap = max(abs(hx[p1] - hx[p0]), abs(hv[p1] - hv[p0]))
+            if gap > gap_tol:
+                ok = False
+                break
+        if ok:
+            return d
+    return n
+
+
+@jit
+def _record_orbit(hx, hv, hm, hc, k, n, size, pts):
+    """The last n section points into pts (n, 2), in time order; returns the impacts and
+    the chatter sequences summed in those n periods."""
+    m = 0
+    c = 0
+    for j in range(k - n + 1, k + 1):
+        a = j % size
+        pts[j - (k - n + 1), 0] = hx[a]
+        pts[j - (k - n + 1), 1] = hv[a]
+        m += hm[a]
+        c += hc[a]
+    return m, c
+
+
+@jit
 def follow_starts(sp, rate, hmax, phase, x0s, v0s, settle_tol, round_tol, set_factor, huge,
                   max_periods, max_period, n_window, chaos_boxes, box_rtol, max_impacts,
                   max_steps, outcome, n_out, m_out, chat_out, pts_out, err_out, box_out,
@@ -236,57 +294,11 @@ def follow_starts(sp, rate, hmax, phase, x0s, v0s, settle_tol, round_tol, set_fa
                 if hit >= 0:
                     res = ON_CHAOTIC + hit
                     break
-            found = 0
-            err = 0.0
-            for n in range(1, max_period + 1):
-                if 3 * n > k:
-                    break
-                e_now = _cycle_displacement(hx, hv, k, n, size, settle_tol)
-                if e_now > settle_tol:
-                    continue
-                if e_now <= round_tol:
-                    found = n
-                    err = round_tol
-                    break
-                if k < 4 * n - 1:
-                    continue
-                err = 0.0
-                for j in range(k - n + 1, k + 1):
-                    err = max(err, _tail_error(hx, hv, j, n, size))
-                if err <= settle_tol:
-                    found = n
-                    err = max(err, round_tol)
-                    break
+            found, err = _settled_period(hx, hv, k, size, max_period, settle_tol, round_tol)
             if found > 0:
-                # a slow approach can pass the test at a multiple of the true period first
-                # (a multiplier near -1): keep the smallest divisor the points repeat at,
-                # each of them being within err of the orbit
-                n = found
-                for d in range(1, n):
-                    if n % d != 0:
-                        continue
-                    ok = True
-                    for j in range(k - n + 1 + d, k + 1):
-                        p1 = j % size
-                        p0 = (j - d) % size
-                        gap = max(abs(hx[p1] - hx[p0]), abs(hv[p1] - hv[p0]))
-                        if gap > set_factor * err + round_tol:
-                            ok = False
-                            break
-                    if ok:
-                        n = d
-                        break
-                m = 0
-                c = 0
-                for j in range(k - n + 1, k + 1):
-                    a = j % size
-                    pts_out[s, j - (k - n + 1), 0] = hx[a]
-                    pts_out[s, j - (k - n + 1), 1] = hv[a]
-                    m += hm[a]
-                    c += hc[a]
+                n = _smallest_repeat(hx, hv, k, found, size, set_factor * err + round_tol)
+                m_out[s], chat_out[s] = _record_orbit(hx, hv, hm, hc, k, n, size, pts_out[s])
                 n_out[s] = n
-                m_out[s] = m
-                chat_out[s] = c
                 err_out[s] = err
                 res = SETTLED
                 break

@@ -502,26 +502,38 @@ def continuation(p: Params, name: str, stop: float, n: int = 1, x0: float | None
     ds = span / 100.0 if ds is None else float(ds)
     ds_min = 1e-9 * max(1.0, span)
     orb = periodic_orbit(p, n, x0, v0, phase)
-
-    def empty(msg):
-        c = np.empty(0)
-        return Branch(name, n, 0, float(phase), c, c, c, np.empty((0, 2), complex),
-                      np.empty(0, bool), np.empty(0, bool), [], np.empty((0, 0)),
-                      np.empty((0, 0)), msg, orb)
-
-    if not orb.converged:
-        return empty(f"no periodic orbit to start from: {orb.message}")
-    if orb.sticks:
-        return empty("the orbit sticks to the wall: its branch has no smooth impact "
-                     "unknowns to follow (multipliers 0)")
-    m = int(orb.impacts)
-    if m == 0:
-        return empty("the orbit has no impact: the multi-segment problem needs impacts")
-    prob = _Problem(p, name, n, m, float(phase))
-    z = np.concatenate([orb.impact_times, orb.impact_velocities, [lam0]])
+    trace = _Trace(name, n, float(phase), orb)
+    refusal = _refusal(orb)
+    if refusal:
+        return trace.branch(0, refusal)
+    prob = _Problem(p, name, n, int(orb.impacts), float(phase))
+    z, J = _polished_start(prob, orb, lam0)
     # the arclength counts the unknowns too: they may move much faster than the parameter
-    ds_max = max(ds, span / 15.0, float(np.linalg.norm(z[:-1])) / 15.0)
-    # polish on the multi-segment problem (already converged to ~1e-12 by periodic_orbit)
+    steps = _Steps(ds, ds_min, max(ds, span / 15.0, float(np.linalg.norm(z[:-1])) / 15.0))
+    trace.problem = prob
+    tests = trace.add(z)
+    z, t, tests = _first_tangent(prob, trace, z, J, tests, steps.ds,
+                                 math.copysign(1.0, stop - lam0))
+    message = _follow(prob, trace, z, t, tests, stop, steps, max_points)
+    return trace.branch(prob.m, message)
+
+
+def _refusal(orb) -> str:
+    """Why the orbit ``orb`` cannot start a branch ("" if it can)."""
+    if not orb.converged:
+        return f"no periodic orbit to start from: {orb.message}"
+    if orb.sticks:
+        return ("the orbit sticks to the wall: its branch has no smooth impact "
+                "unknowns to follow (multipliers 0)")
+    if int(orb.impacts) == 0:
+        return "the orbit has no impact: the multi-segment problem needs impacts"
+    return ""
+
+
+def _polished_start(prob, orb, lam0):
+    """The start z = (impact times, impact velocities, parameter) and its Jacobian,
+    polished on the multi-segment problem (periodic_orbit converged it to ~1e-12)."""
+    z = np.concatenate([orb.impact_times, orb.impact_velocities, [lam0]])
     F, J = prob.jacobian(z)
     if np.max(np.abs(F)) > 1e-10:
         for _ in range(NEWTON_MAX):
@@ -529,20 +541,57 @@ def continuation(p: Params, name: str, stop: float, n: int = 1, x0: float | None
             F, J = prob.jacobian(z)
             if np.max(np.abs(F)) <= 1e-12:
                 break
+    return z, J
 
-    pts = []
-    events = []
 
-    def add(zp):
-        x, v, mu, st, adm, tests = prob.describe(zp)
-        pts.append((zp.copy(), x, v, mu, st, adm))
+class _Trace:
+    """The points and events of a branch as it is followed, and the Branch they make."""
+
+    def __init__(self, name, n, phase, orb):
+        self.name, self.n, self.phase, self.orb = name, n, phase, orb
+        self.problem = None
+        self.points = []        # (z, x, v, multipliers, stable, admissible)
+        self.events = []
+
+    def add(self, z):
+        """Append the point z; return its test functions."""
+        x, v, mu, st, adm, tests = self.problem.describe(z)
+        self.points.append((z.copy(), x, v, mu, st, adm))
         return tests
 
-    tests_prev = add(z)
-    direction = math.copysign(1.0, stop - lam0)
-    # a period-doubling point of the n/2 orbit, started as an n orbit: switch branches
+    def add_event(self, kind, z):
+        """Append the point z of an event of ``kind`` and the Event itself."""
+        self.add(z)
+        prob, m = self.problem, self.problem.m
+        _, x, v, mu = self.points[-1][:4]
+        self.events.append(Event(kind, z[-1], prob.params(z[-1]), x, v, mu,
+                                 len(self.points) - 1, self.name, self.n, self.phase,
+                                 z[:m].copy(), z[m:2 * m].copy()))
+
+    def branch(self, m, message) -> Branch:
+        pts = self.points
+        if not pts:
+            c = np.empty(0)
+            return Branch(self.name, self.n, 0, self.phase, c, c, c, np.empty((0, 2), complex),
+                          np.empty(0, bool), np.empty(0, bool), [], np.empty((0, 0)),
+                          np.empty((0, 0)), message, self.orb)
+        zs = np.array([q[0] for q in pts])
+        return Branch(name=self.name, n=self.n, impacts=m, phase=self.phase,
+                      param=zs[:, -1].copy(), x=np.array([q[1] for q in pts]),
+                      v=np.array([q[2] for q in pts]),
+                      multipliers=np.array([q[3] for q in pts]),
+                      stable=np.array([q[4] for q in pts]),
+                      admissible=np.array([q[5] for q in pts]), events=self.events,
+                      impact_times=zs[:, :m].copy(), impact_velocities=zs[:, m:2 * m].copy(),
+                      message=message, start=self.orb)
+
+
+def _first_tangent(prob, trace, z, J, tests, ds, direction):
+    """(z, t, tests) to step from: the tangent at the start pointing towards ``stop``,
+    or, at a period-doubling point of the n/2 orbit started as an n orbit, the first
+    point and tangent of the doubled branch (a branch switch)."""
+    n = prob.n
     sv = np.linalg.svd(J[:, :-1], compute_uv=False)
-    switched = False
     if n % 2 == 0 and sv[-1] < 1e-7 * sv[0]:
         _, _, vt = np.linalg.svd(J[:, :-1])
         nu = np.concatenate([vt[-1], [0.0]])
@@ -550,85 +599,105 @@ def continuation(p: Params, name: str, stop: float, n: int = 1, x0: float | None
         if z1 is not None:
             _, J1 = prob.jacobian(z1)
             t = _null_tangent(J1, z1 - z)
-            tests_prev = add(z1)
-            z = z1
-            switched = True
-    if not switched:
-        t = _null_tangent(J)
-        if t[-1] * direction < 0:
-            t = -t
-    message = f"reached max_points={max_points}"
-    e_lam = np.zeros(z.size)
-    e_lam[-1] = 1.0
-    while len(pts) < max_points:
-        lam_pred = z[-1] + ds * t[-1]
-        at_stop = (z[-1] - stop) * (lam_pred - stop) <= 0.0 and t[-1] != 0.0
-        if at_stop:
-            # this step reaches stop: land on it (Newton at the fixed parameter value)
-            frac = (stop - z[-1]) / (ds * t[-1])
-            z_new, its = _correct(prob, z + frac * ds * t, e_lam, stop, np.zeros(z.size))
-        else:
-            z_new, its = _correct(prob, z + ds * t, t, ds, z)
-        t_new = None
-        if z_new is not None:
-            _, Jn = prob.jacobian(z_new)
-            t_new = _null_tangent(Jn, t)
-            if float(t_new @ t) < 0.98 and ds > ds_min:
-                z_new = None
+            return z1, t, trace.add(z1)
+    t = _null_tangent(J)
+    if t[-1] * direction < 0:
+        t = -t
+    return z, t, tests
+
+
+class _Steps:
+    """The arclength step: halved on a failed or too large step, grown after easy ones."""
+
+    def __init__(self, ds, ds_min, ds_max):
+        self.ds, self.ds_min, self.ds_max = ds, ds_min, ds_max
+
+    @property
+    def smallest(self) -> bool:
+        return self.ds <= self.ds_min
+
+    def halve(self):
+        self.ds = max(0.5 * self.ds, self.ds_min)
+
+    def adapt(self, newton_iterations):
+        if newton_iterations <= 3:
+            self.ds = min(self.ds * 1.4, self.ds_max)
+        elif newton_iterations >= 6:
+            self.ds = max(self.ds * 0.6, self.ds_min)
+
+
+def _predict_correct(prob, z, t, stop, steps):
+    """One predictor-corrector step from (z, t): (z_new, t_new, iterations, at_stop),
+    z_new None where the corrector failed or the tangent turned too far. A step that
+    reaches ``stop`` lands on it (Newton at the fixed parameter value)."""
+    ds = steps.ds
+    lam_pred = z[-1] + ds * t[-1]
+    at_stop = (z[-1] - stop) * (lam_pred - stop) <= 0.0 and t[-1] != 0.0
+    if at_stop:
+        frac = (stop - z[-1]) / (ds * t[-1])
+        e_lam = np.zeros(z.size)
+        e_lam[-1] = 1.0
+        z_new, its = _correct(prob, z + frac * ds * t, e_lam, stop, np.zeros(z.size))
+    else:
+        z_new, its = _correct(prob, z + ds * t, t, ds, z)
+    t_new = None
+    if z_new is not None:
+        _, Jn = prob.jacobian(z_new)
+        t_new = _null_tangent(Jn, t)
+        if float(t_new @ t) < 0.98 and not steps.smallest:
+            z_new = None
+    return z_new, t_new, its, at_stop
+
+
+def _multipliers_jump(mu, mu_prev, steps) -> bool:
+    """Multipliers near the unit circle must move little per step, so that no pair of
+    events (a stability change and its reversal) hides inside one step."""
+    return bool(not steps.smallest and np.max(np.abs(mu - mu_prev)) > MU_STEP
+                and min(np.max(np.abs(mu)), np.max(np.abs(mu_prev))) < MU_WATCH)
+
+
+def _events_in_step(prob, z, t, z_new, tests_prev, tests):
+    """The events whose test changes sign between z and z_new, located on the step, in
+    the order they occur along it: [(arclength, kind, point)]."""
+    s_step = float(t @ (z_new - z))
+    found = []
+    for kind in EVENT_KINDS:
+        a, b = tests_prev[kind], tests[kind]
+        if math.isfinite(a) and math.isfinite(b) and (a > 0) != (b > 0) and a != 0.0:
+            ze = _locate(prob, z, t, s_step, kind, a, b)
+            if ze is not None:
+                found.append((float(t @ (ze - z)), kind, ze))
+    found.sort(key=lambda e: e[0])
+    return found
+
+
+def _follow(prob, trace, z, t, tests_prev, stop, steps, max_points) -> str:
+    """Step along the branch from (z, t) until ``stop``, a grazing, ``max_points`` or a
+    failure at the smallest step; the points and events go to ``trace``. Returns the
+    branch's message."""
+    name = prob.name
+    while len(trace.points) < max_points:
+        z_new, t_new, its, at_stop = _predict_correct(prob, z, t, stop, steps)
         if z_new is None:
-            if ds <= ds_min:
+            if steps.smallest:
                 try:
-                    prob.params(z[-1] + ds_min * t[-1])
-                    message = "the corrector failed at the smallest step"
+                    prob.params(z[-1] + steps.ds_min * t[-1])
+                    return "the corrector failed at the smallest step"
                 except ValueError:
-                    message = f"reached the edge of the valid range of {name}"
-                break
-            ds = max(0.5 * ds, ds_min)
+                    return f"reached the edge of the valid range of {name}"
+            steps.halve()
             continue
-        x, v, mu, st, adm, tests = prob.describe(z_new)
-        mu_prev = pts[-1][3]
-        if (ds > ds_min and np.max(np.abs(mu - mu_prev)) > MU_STEP
-                and min(np.max(np.abs(mu)), np.max(np.abs(mu_prev))) < MU_WATCH):
-            # multipliers near the unit circle move little per step, so that no pair of
-            # events (a stability change and its reversal) hides inside one step
-            ds = max(0.5 * ds, ds_min)
+        _, _, mu, _, _, tests = prob.describe(z_new)
+        if _multipliers_jump(mu, trace.points[-1][3], steps):
+            steps.halve()
             continue
-        s_step = float(t @ (z_new - z))
-        # events in this step, in the order they occur along it
-        found = []
-        for kind in EVENT_KINDS:
-            a, b = tests_prev[kind], tests[kind]
-            if math.isfinite(a) and math.isfinite(b) and (a > 0) != (b > 0) and a != 0.0:
-                ze = _locate(prob, z, t, s_step, kind, a, b)
-                if ze is not None:
-                    found.append((float(t @ (ze - z)), kind, ze))
-        found.sort(key=lambda e: e[0])
-        stop_here = False
-        for _, kind, ze in found:
-            add(ze)
-            zp, xe, ve, mue = pts[-1][0], pts[-1][1], pts[-1][2], pts[-1][3]
-            events.append(Event(kind, ze[-1], prob.params(ze[-1]), xe, ve, mue, len(pts) - 1,
-                                name, n, float(phase), ze[:m].copy(), ze[m:2 * m].copy()))
+        for _, kind, ze in _events_in_step(prob, z, t, z_new, tests_prev, tests):
+            trace.add_event(kind, ze)
             if kind == "grazing":
-                message = f"stopped at grazing, {name} = {ze[-1]:.10g}"
-                stop_here = True
-                break
-        if stop_here:
-            break
-        tests_prev = add(z_new)
+                return f"stopped at grazing, {name} = {ze[-1]:.10g}"
+        tests_prev = trace.add(z_new)
         if at_stop:
-            message = f"reached {name} = {stop:g}"
-            break
+            return f"reached {name} = {stop:g}"
         z, t = z_new, t_new
-        if its <= 3:
-            ds = min(ds * 1.4, ds_max)
-        elif its >= 6:
-            ds = max(ds * 0.6, ds_min)
-    zs = np.array([q[0] for q in pts])
-    return Branch(name=name, n=n, impacts=m, phase=float(phase), param=zs[:, -1].copy(),
-                  x=np.array([q[1] for q in pts]), v=np.array([q[2] for q in pts]),
-                  multipliers=np.array([q[3] for q in pts]),
-                  stable=np.array([q[4] for q in pts]),
-                  admissible=np.array([q[5] for q in pts]), events=events,
-                  impact_times=zs[:, :m].copy(), impact_velocities=zs[:, m:2 * m].copy(),
-                  message=message, start=orb)
+        steps.adapt(its)
+    return f"reached max_points={max_points}"

@@ -456,6 +456,29 @@ def sweep_options(**kw) -> dict:
     return kw
 
 
+def row_order(index, direction, t) -> np.ndarray:
+    """The order of rows by value index, then direction (up first), then time, i.e.
+    ``np.lexsort((t, -direction, index))``. Each run's rows arrive together and in time
+    order, so only the runs are sorted (a few thousand keys where the rows are 10^5: the
+    lexsort of all rows was most of a diagram's serial time); rows that do not arrive
+    so are sorted in full."""
+    m = index.size
+    if m == 0:
+        return np.zeros(0, dtype=np.int64)
+    starts = np.flatnonzero(np.r_[True, (index[1:] != index[:-1])
+                                  | (direction[1:] != direction[:-1])])
+    lengths = np.diff(np.r_[starts, m])
+    within = np.ones(m, dtype=bool)
+    within[starts] = False
+    if np.any(t[1:][within[1:]] < t[:-1][within[1:]]):
+        return np.lexsort((t, -direction, index))
+    runs = np.lexsort((-direction[starts], index[starts]))
+    if np.unique(index[starts] * 3 + direction[starts]).size < starts.size:
+        return np.lexsort((t, -direction, index))     # one run's rows in two places
+    first = np.cumsum(np.r_[0, lengths[runs][:-1]])
+    return np.repeat(starts[runs] - first, lengths[runs]) + np.arange(m)
+
+
 def merge_parts(name, values, parts, elapsed) -> Bifurcation:
     """One Bifurcation from parts (positions in values, status, n_impacts, row arrays):
     rows sorted by value index, then direction (up first), then time; per-value status the
@@ -467,7 +490,7 @@ def merge_parts(name, values, parts, elapsed) -> Bifurcation:
         np.maximum.at(status, order, st)
         np.add.at(n_impacts, order, counts)
     cols = [np.concatenate(c) for c in zip(*(rows for *_, rows in parts))]
-    k = np.lexsort((cols[2], -cols[5], cols[4]))
+    k = row_order(cols[4], cols[5], cols[2])
     param, v, t, phase, index, direction = (c[k] for c in cols)
     return Bifurcation(name=name, values=values, param=param, v=v, t=t, phase=phase,
                        index=index, direction=direction, status=status, n_impacts=n_impacts,
@@ -648,21 +671,21 @@ def bifurcation_with_lyapunov(p, name, values, t_end, t_record, method, x0, v0, 
                                 out_t, out_v, counts, t0 + t_record, t0 + t_end)
         return out_t, out_v, counts, status, lam
 
-    jobs = []
+    done = []         # (direction, order, results of run(order))
     if warm_start:
         srt = np.argsort(values, kind="stable")
+        jobs = []
         for d in {"up": [1], True: [1], "down": [-1], "both": [1, -1]}[warm_start]:
             order = srt if d > 0 else srt[::-1]
             jobs.append((d, order, ex.submit(run, order, True)))
+        done = [(d, order, fut.result()) for d, order, fut in jobs]
     else:
-        nchunks = min(n, max(4 * (workers or worker_count()), int(math.ceil(n / 128))))
-        for j in range(nchunks):
-            order = np.arange(j, n, nchunks)
-            jobs.append((0, order, ex.submit(run, order, False)))
+        # handed out on demand, in shrinking blocks, as the plain diagram's runs
+        run_blocks(n, lambda idx: done.append((0, idx, run(idx, False))), order=interleaved(n),
+                   max_block=max(1, BLOCK_OUTPUT // max(1, cap_per_value)), workers=workers)
     parts = []
     lam_all = np.full(n, -math.inf)
-    for d, order, fut in jobs:
-        out_t, out_v, counts, st, lam = fut.result()
+    for d, order, (out_t, out_v, counts, st, lam) in done:
         parts.append((order, st, counts, _rows(values, order, T_of, out_t, out_v, counts, d)))
         # warm "both": the larger of the two directions' exponents (NaN if either is)
         lam_all[order] = np.maximum(lam_all[order], lam)

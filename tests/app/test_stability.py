@@ -320,24 +320,35 @@ def test_strip_marks_chaos_only_where_classify_calls_it(make_explorer):
 @pytest.mark.parametrize("omega", [2.4321, 2.8123])
 def test_one_omega_move_is_one_simulation_and_at_most_one_lyapunov_run(make_explorer,
                                                                         monkeypatch, omega):
-    """The scene, its Poincaré section and the stability readout share the scene's run;
-    the readout's exponents are classify's own measurement (2.8123: not periodic). The
-    displacement view's zoom window (the last periods, sampled densely) is a run of its
-    own, recognisable by its record window."""
+    """The scene, its Poincaré section, the stability readout and the time plot's first
+    window all read the scene's one run (counted where every il.simulate enters the
+    engine); the readout's exponents are classify's own measurement (2.8123: not
+    periodic), its one Lyapunov run."""
     from impactlib.analysis import lyapunov
+    from impactlib.kernels import engine
     e = make_explorer()
-    for job in (e.scene_job, e.stability_job):
+    jobs = (e.scene_job, e.stability_job, e.window_job)
+    for job in jobs:
         assert job.done.wait(60)
-    runs, lyap = [], []
-    real_sim, real_ly = il.simulate, lyapunov.lyapunov_run
-    monkeypatch.setattr(il, "simulate", lambda *a, **k: runs.append(k) or real_sim(*a, **k))
+    runs, sims, lyap, windows = [], [], [], []
+    real_entry, real_sim, real_ly = engine.run_from_python, il.simulate, lyapunov.lyapunov_run
+    monkeypatch.setattr(engine, "run_from_python",
+                        lambda *a: runs.append(a[1][engine.T_RECORD]) or real_entry(*a))
+    monkeypatch.setattr(il, "simulate", lambda *a, **k: sims.append(k) or real_sim(*a, **k))
     monkeypatch.setattr(lyapunov, "lyapunov_run", lambda *a, **k: lyap.append(a) or real_ly(*a, **k))
+    real_show = e.displacement.show_window
+    monkeypatch.setattr(e.displacement, "show_window",
+                        lambda run, cols: windows.append((run, cols)) or real_show(run, cols))
     e.settings.omega = omega
-    for job in (e.scene_job, e.stability_job):
+    for job in jobs:
         assert job.done.wait(60)
     assert e.readout is not None and e.readout.kind != "failed"
-    scene_runs = [k for k in runs if k["t_record"] == e.run.t_record]
-    window_runs = [k for k in runs if k["t_record"] > e.run.t_record]
-    assert len(scene_runs) == 1 and len(window_runs) <= 1, runs
-    assert len(runs) == len(scene_runs) + len(window_runs)
+    # the time plot got its first window of the new run, sampled as a window of its own
+    # would be (>= 48 samples per period, >= 2 per pixel of the width assumed unrendered)
+    assert windows and windows[-1][0] is e.run
+    t = np.asarray(windows[-1][1]["t"])
+    start, end = e.run.t_end - 8 * e.run.params.T, e.run.t_end
+    assert t[0] == start and t[-1] == end
+    assert np.count_nonzero(np.diff(t) > 0) >= 2 * 1000 - 1
+    assert runs == [e.run.t_record] and len(sims) == 1, (runs, sims)
     assert len(lyap) == (1 if e.readout.kind == "exponents" else 0)
