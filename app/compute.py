@@ -172,7 +172,7 @@ def window_columns(run: Run, start: float, end: float, pixels: int) -> dict:
     steps: its impacts are bit for bit those of the scene), simulated up to ``end``.
     """
     p = run.params
-    a, b = max(float(start), run.t_record), min(float(end), run.t_end)
+    a, b = max(float(start), run.scene_start[2]), min(float(end), run.t_end)
     pixels = int(min(max(pixels or 1000, 200), 4000))
     if not b > a:
         return {"t": np.zeros(0), "x": np.zeros(0), "v": np.zeros(0)}

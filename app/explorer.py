@@ -6,8 +6,9 @@ A settings change is validated into a ``Run``; what it changes decides the work:
   a psi change alone re-samples the Poincaré section only);
 - ``Run.diagram_key``: the diagram job restarts; omega alone only moves its marker;
 - ``stability.readout_key`` (physics, start, window): the stability readout job;
-- a run recorded from t = 0: the orbit job (``app.orbit_pick``: does it start on a
-  periodic orbit, as a tap on a branch or a boundary curve makes it? The caption says);
+- ``orbit_x0``, ``orbit_v0`` (a tap on a branch or a boundary curve): the orbit job
+  (``app.orbit_pick``: the orbit the scene starts on, for the caption); a change of the
+  physics or of the diagram's start empties them;
 - ``branches`` on, or a finished diagram while it is on: the branch job (seeded from the
   diagram's chunks; cancelled when the diagram restarts or the overlay is switched off).
 
@@ -210,6 +211,11 @@ class Explorer(pn.viewable.Viewer):
         changed = {e.name for e in events}
         st = self.settings
         span = SWEEP_RANGES[st.bif_param]
+        if (changed & state.LEAVES_ORBIT and not changed & state.ORBIT_FIELDS
+                and st.orbit_x0 is not None):
+            # the orbit the scene started on belongs to the settings left
+            self.settings.param.update(orbit_x0=None, orbit_v0=None)
+            return
         if ("bif_param" in changed and not changed & {"bif_min", "bif_max"}
                 and (st.bif_min, st.bif_max) != span):
             # another parameter: its own default range (the nested update applies it)

@@ -6,14 +6,16 @@ picture's span).  Its parameters are put on the settings' grid (as every value t
 computes with), and the orbit is solved there by ``il.periodic_orbit`` from that point's
 state (Newton with the exact Jacobian; an unstable orbit is a fixed point like a stable
 one).  The scene then starts on the orbit's state at t = 0, the section phase of the
-branches, with no transient discarded: the settings ``x0``, ``v0`` and ``t_record = 0``
-say so, in the URL like any other start.
+branches, with no transient discarded: the settings ``orbit_x0``, ``orbit_v0`` say so,
+in the URL like any other state.  They start the scene alone (``Run.scene_start``): the
+diagram and the regime map, with the branches and curves tapped, keep their own start
+and window and are not computed again.
 
 The caption's words come from the settings alone (``recognise``), so a link gives the
-same caption: a run recorded from t = 0 whose start returns to itself after n periods
-and lies on a periodic orbit (Newton stays there) is that orbit; how long the run stays
-on it is measured on the run's own section points at t = k T (the first one farther
-than ``LEAVE_RTOL`` from the orbit's).  Nothing here knows about Panel.
+same caption: the start must return to itself after n periods and lie on a periodic
+orbit (Newton stays there); how long the run stays on it is measured on the run's own
+section points at t = k T (the first one farther than ``LEAVE_RTOL`` from the orbit's).
+Nothing here knows about Panel.
 """
 from __future__ import annotations
 
@@ -121,8 +123,8 @@ def pick(p: il.Params, values: dict, n: int, x: float, v: float, phase: float) -
     orb = solve(q, n, x, v)
     if orb is None or orb.x < q.g:
         return None
-    settings = {**grid, "x0": rounded(BY_NAME["x0"], orb.x),
-                "v0": rounded(BY_NAME["v0"], orb.v), "t_record": 0.0}
+    settings = {**grid, "orbit_x0": rounded(BY_NAME["orbit_x0"], orb.x),
+                "orbit_v0": rounded(BY_NAME["orbit_v0"], orb.v)}
     return Pick(settings, orb)
 
 
@@ -146,16 +148,15 @@ def pick_on_curve(curves, x: float, y: float, x_span: float, y_span: float) -> P
 
 
 def recognise_key(run) -> tuple | None:
-    """What ``recognise(run)`` depends on; None for a run that cannot start on an orbit
-    as a tap sets it (recorded from a later time, or started at the wall)."""
-    if run is None or run.t_record != 0.0 or run.x0 is None:
+    """What ``recognise(run)`` depends on; None for a scene not started on an orbit."""
+    if run is None or run.orbit_x0 is None:
         return None
-    return (run.params, run.x0, run.v0, run.t_end)
+    return (run.params, run.orbit_x0, run.orbit_v0, run.t_end)
 
 
 def recognise(run) -> OrbitStart | None:
-    """The periodic orbit ``run`` starts on, if it is recorded from t = 0 and starts on
-    one (see the module's note); None otherwise."""
+    """The periodic orbit ``run``'s scene starts on (see the module's note); None when
+    it starts on none."""
     key = recognise_key(run)
     return None if key is None else _recognise(*key)
 

@@ -91,10 +91,11 @@ class DisplacementView(View):
         self.sticking.data = dict(scene.sticking)
         self.wall.location = g
         self.run = run = scene.run
-        start = max(run.t_record, run.t_end - PERIODS_SHOWN * run.params.T)
+        t_record = run.scene_start[2]
+        start = max(t_record, run.t_end - PERIODS_SHOWN * run.params.T)
         self.figure.x_range.update(start=start, end=run.t_end, reset_start=start,
                                    reset_end=run.t_end)
         self.figure.title.text = "Displacement x(τ)"
-        self.figure.xaxis.axis_label = (f"time τ (s); zoom out: {run.t_record:g}–"
+        self.figure.xaxis.axis_label = (f"time τ (s); zoom out: {t_record:g}–"
                                         f"{run.t_end:g} s")
         self._ask(run, start, run.t_end, self._pixels())
