@@ -111,21 +111,47 @@ def solve(p: il.Params, n: int, x: float, v: float):
     return orb
 
 
+def on_grid(name: str, value: float) -> list[float]:
+    """Values of setting ``name`` on its grid next to ``value``, nearest first (where
+    the nearest one misses the orbit, past a fold, the next may hold it)."""
+    s = BY_NAME[name]
+    near = rounded(s, value)
+    if s.step is None:
+        return [near]
+    out = {near}
+    for k in (-1, 1):
+        try:
+            q = rounded(s, near + k * s.step)
+        except (TypeError, ValueError):
+            continue
+        out.add(q)
+    return sorted(out, key=lambda q: abs(q - value))
+
+
 def pick(p: il.Params, values: dict, n: int, x: float, v: float, phase: float) -> Pick | None:
     """The settings that start the scene on the period-n orbit through (x, v) at
-    t = phase of ``p`` with ``values`` (parameter -> value) put on the settings' grid."""
-    grid = {name: rounded(BY_NAME[name], float(value)) for name, value in values.items()}
+    t = phase of ``p`` with ``values`` (parameter -> value) put on the settings' grid
+    (the nearest grid point where Newton finds that orbit)."""
     try:
         x, v = state_at_zero(p.replace(**values), n, x, v, phase)
-        q = p.replace(**grid)
     except ValueError:
         return None
-    orb = solve(q, n, x, v)
-    if orb is None or orb.x < q.g:
-        return None
-    settings = {**grid, "orbit_x0": rounded(BY_NAME["orbit_x0"], orb.x),
-                "orbit_v0": rounded(BY_NAME["orbit_v0"], orb.v)}
-    return Pick(settings, orb)
+    grids = [[]]
+    for name, value in values.items():
+        grids = [g + [(name, q)] for g in grids for q in on_grid(name, float(value))]
+    grids.sort(key=lambda g: sum(((q - values[n_]) / (BY_NAME[n_].step or 1.0)) ** 2
+                                 for n_, q in g))
+    for grid in map(dict, grids):
+        try:
+            q = p.replace(**grid)
+        except ValueError:
+            continue
+        orb = solve(q, n, x, v)
+        if orb is not None and orb.x >= q.g:
+            settings = {**grid, "orbit_x0": rounded(BY_NAME["orbit_x0"], orb.x),
+                        "orbit_v0": rounded(BY_NAME["orbit_v0"], orb.v)}
+            return Pick(settings, orb)
+    return None
 
 
 def pick_on_branch(branches, x: float, y: float, x_span: float, y_span: float) -> Pick | None:
