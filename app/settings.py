@@ -166,13 +166,13 @@ SETTINGS: tuple[Setting, ...] = (
             "Time window, start, method", half=True, optional=True),
     Setting("v0", "v₀  initial velocity", 0.0, "Initial velocity ẋ(0).", _EVERYTHING,
             "Time window, start, method", half=True),
-    Setting("orbit_x0", "orbit x at t = 0", None,
+    Setting("orbit_x0", "orbit x₀  on a periodic orbit", None,
             "The scene starts on a periodic orbit (a tap on a branch or a boundary curve): "
             "its state (x, ẋ) at t = 0, run with no transient discarded. Empty: the scene "
             "starts at (x₀, v₀) and discards the transient, as the diagram and the maps "
             "do (they never use these two).", _TRAJECTORY, "Time window, start, method",
             half=True, optional=True),
-    Setting("orbit_v0", "orbit ẋ at t = 0", None,
+    Setting("orbit_v0", "orbit v₀  on a periodic orbit", None,
             "Velocity of the periodic orbit's state at t = 0 (with orbit_x0).", _TRAJECTORY,
             "Time window, start, method", half=True, optional=True),
     Setting("method", "method", "exact",
