@@ -182,6 +182,7 @@ class _Curve:
         self.DF = np.empty((2 * m, 2 * m))
         self._cache = {}
         self.base = tuple(getattr(p, n) for n in PARAM_NAMES)
+        self.last_jacobian = None
 
     def params(self, lam) -> Params:
         return self.p.replace(**{self.names[0]: float(lam[0]), self.names[1]: float(lam[1])})
@@ -247,14 +248,35 @@ class _Curve:
         segments_residual(sp, ts, us, total, self.F, self.DF)
         return np.concatenate([self.F, self.conditions(sp, total, ts, us, s)])
 
+    def condition_columns(self) -> range | tuple:
+        """The (t, u) unknowns the defining condition depends on: all of them for a
+        multiplier condition, u_j for an impact at zero speed, t_j and u_j (the start of
+        the touching flight) for a flight touching the wall."""
+        m = self.m
+        if self.touch is None:
+            return range(2 * m)
+        j = self.touch[1]
+        return (m + j,) if self.touch[0] == "impact" else (j, m + j)
+
     def jacobian(self, y):
         """(H, DH): exact in (t, u) for the multi-segment rows, central differences for
-        the condition rows and for the extra and parameter columns."""
+        the condition rows and for the extra and parameter columns.  A (t, u) column
+        needs the conditions only, at the unknowns they depend on (the others are 0)."""
         m2 = 2 * self.m
         H = self.residual(y)
         J = np.zeros((self.nz - 1, self.nz))
         J[:m2, :m2] = self.DF
-        for i in range(self.nz):
+        sp, total = self.sp(y[-2:])
+        for i in self.condition_columns():
+            h = 1e-7 * (1.0 + abs(y[i]))
+            yp = y.copy()
+            yp[i] += h
+            ym = y.copy()
+            ym[i] -= h
+            cp = self.conditions(sp, total, *self.split(yp))
+            cm = self.conditions(sp, total, *self.split(ym))
+            J[m2:, i] = (np.asarray(cp) - np.asarray(cm)) / (yp[i] - ym[i])
+        for i in range(m2, self.nz):
             param = i >= self.nz - 2
             h = (1e-6 * max(1.0, abs(y[i]))) if param else 1e-7 * (1.0 + abs(y[i]))
             yp = y.copy()
@@ -269,11 +291,7 @@ class _Curve:
                 hm = self.residual(ym)
             except ValueError:
                 hm, ym = H, y
-            col = (hp - hm) / (yp[i] - ym[i])
-            if i < m2:
-                J[m2:, i] = col[m2:]
-            else:
-                J[:, i] = col
+            J[:, i] = (hp - hm) / (yp[i] - ym[i])
         return H, J
 
     def converged(self, H, J, y):
@@ -284,7 +302,10 @@ class _Curve:
                 and np.max(np.abs(H[m2:])) <= NEWTON_TOL * scale * grad)
 
     def correct(self, y_pred, row, target):
-        """Newton on [H(y); row . y - target]; (y, iterations), y None on failure."""
+        """Newton on [H(y); row . y - target]; (y, iterations), y None on failure.  On
+        success ``last_jacobian`` holds the Jacobian of the last step (taken at most
+        1e-12 (relative) before y, or where Newton's final steps no longer move it)."""
+        self.last_jacobian = None
         y = y_pred.copy()
         A = np.empty((self.nz, self.nz))
         b = np.empty(self.nz)
@@ -311,17 +332,22 @@ class _Curve:
                 except ValueError:
                     return None, it
                 if self.converged(H, J, y):
+                    self.last_jacobian = J
                     return y, it
         try:
             H = self.residual(y)
         except ValueError:
             return None, NEWTON_MAX
         if J is not None and self.converged(H, J, y):
+            self.last_jacobian = J
             return y, NEWTON_MAX
         return None, NEWTON_MAX
 
-    def tangent(self, y, t_prev=None):
-        _, J = self.jacobian(y)
+    def tangent(self, y, t_prev=None, J=None):
+        """The unit tangent at y (the null vector of the Jacobian, ``J`` if given),
+        oriented along ``t_prev``."""
+        if J is None:
+            _, J = self.jacobian(y)
         qm, _ = np.linalg.qr(J.T, mode="complete")
         t = qm[:, -1]
         if t_prev is not None and float(t @ t_prev) < 0.0:
@@ -642,7 +668,9 @@ def boundary(event, name: str, stop: float, *, ds: float | None = None,
         t_new = None
         if y_new is not None:
             try:
-                t_new = curve.tangent(y_new, t)
+                # the corrector's last Jacobian: its tangent differs by ~1e-12 from one
+                # evaluated at y_new, one Jacobian less per point
+                t_new = curve.tangent(y_new, t, curve.last_jacobian)
             except ValueError:
                 y_new = None
             else:
