@@ -84,7 +84,7 @@ def main() -> None:
 
 def full_jacobian(self, y):
     """The corrector's Jacobian with every (t, u) column by central differences of the
-    whole residual (the alternative to ``_Curve.jacobian``, which differentiates only
+    whole residual (the alternative to ``CurveSystem.jacobian``, which differentiates only
     the conditions, at the unknowns they depend on)."""
     m2 = 2 * self.m
     H = self.residual(y)
@@ -118,7 +118,7 @@ def overlay(repeats: int) -> None:
     corrector as it is against the alternative of ``full_jacobian`` and a tangent from a
     Jacobian of its own at every point, alternated, medians of ``repeats``."""
     from app import boundaries, state
-    from impactlib.analysis import boundary as bmod
+    from impactlib.analysis import boundary_system as bmod
     boundaries.WALL_TIME = float("inf")
     run = state.validate(state.defaults())
     req = boundaries.BoundaryRequest(run, run.map_x, run.map_y)
@@ -144,18 +144,18 @@ def overlay(repeats: int) -> None:
                                      max_points=boundaries.MAX_POINTS).values)
                      for e, stop in jobs)
         return time.process_time() - tic, points
-    jacobian, tangent = bmod._Curve.jacobian, bmod._Curve.tangent
+    jacobian, tangent = bmod.CurveSystem.jacobian, bmod.CurveSystem.tangent
     times = {"as is": [], "alternative": []}
     points = {}
     for _ in range(repeats):
         for label in times:
             if label == "alternative":
-                bmod._Curve.jacobian = full_jacobian
-                bmod._Curve.tangent = lambda self, y, t_prev=None, J=None: tangent(self, y, t_prev)
+                bmod.CurveSystem.jacobian = full_jacobian
+                bmod.CurveSystem.tangent = lambda self, y, t_prev=None, J=None: tangent(self, y, t_prev)
             try:
                 t, points[label] = curves()
             finally:
-                bmod._Curve.jacobian, bmod._Curve.tangent = jacobian, tangent
+                bmod.CurveSystem.jacobian, bmod.CurveSystem.tangent = jacobian, tangent
             times[label].append(t)
     med = {k: statistics.median(v) for k, v in times.items()}
     print(f"  seeds and branches: {seeds:.2f} s CPU, {len(events)} events, {len(jobs)} curves")
