@@ -218,11 +218,10 @@ def describe(start: OrbitStart, names: dict) -> str:
     mus = ", ".join(_complex(complex(m)) for m in o.multipliers)
     at = ", ".join(f"{sym} = {getattr(o.params, name):g}" for name, sym in names.items())
     head = (f"**{'Stable' if o.stable else 'Unstable'} {o.label} orbit at {at}**, "
-            f"multipliers {mus}; the run starts on it at t = 0 (no transient)")
+            f"multipliers {mus}; the run starts on it (t = 0, no transient)")
     if start.close < start.periods:
-        return (f"{head} and leaves it after ≈ {start.close} periods (its section state "
-                f"then lies more than {LEAVE_RTOL:g} · max(1, |x₀|, |v₀|) from the "
-                f"orbit's).")
+        return (f"{head} and leaves it after ≈ {start.close} periods (section state off by "
+                f"> {LEAVE_RTOL:g} · max(1, |x₀|, |v₀|)).")
     return f"{head} and stays on it for all {start.periods} periods of the run."
 
 

@@ -17,6 +17,9 @@ from .base import View
 
 #: The x axis opens on the last few periods; reset/zoom out shows the whole window.
 PERIODS_SHOWN = 8
+#: A scene started on a periodic orbit shows its first periods instead (long enough to
+#: see an unstable orbit followed, then left).
+ORBIT_PERIODS_SHOWN = 24
 
 
 class DisplacementView(View):
@@ -92,10 +95,12 @@ class DisplacementView(View):
         self.wall.location = g
         self.run = run = scene.run
         t_record = run.scene_start[2]
-        start = max(t_record, run.t_end - PERIODS_SHOWN * run.params.T)
-        self.figure.x_range.update(start=start, end=run.t_end, reset_start=start,
-                                   reset_end=run.t_end)
+        if run.orbit_x0 is not None:
+            start, end = t_record, min(run.t_end, t_record + ORBIT_PERIODS_SHOWN * run.params.T)
+        else:
+            start, end = max(t_record, run.t_end - PERIODS_SHOWN * run.params.T), run.t_end
+        self.figure.x_range.update(start=start, end=end, reset_start=start, reset_end=end)
         self.figure.title.text = "Displacement x(τ)"
         self.figure.xaxis.axis_label = (f"time τ (s); zoom out: {t_record:g}–"
                                         f"{run.t_end:g} s")
-        self._ask(run, start, run.t_end, self._pixels())
+        self._ask(run, start, end, self._pixels())

@@ -68,6 +68,9 @@ def test_a_tap_on_an_unstable_branch_starts_the_scene_on_its_orbit(make_explorer
     assert sec["t"][0] == 0.0 and sec["t"][1] == pytest.approx(p.T, rel=1e-12)
     assert abs(sec["x"][1] - z[0]) < 1e-8 * scale and abs(sec["v"][1] - z[1]) < 1e-8 * scale
     assert e.scene.trajectory["t"][0] == 0.0          # no transient discarded
+    # x(t) opens on the run's first periods (the orbit followed, then left)
+    rng = e.displacement.figure.x_range
+    assert rng.start == 0.0 and rng.end == pytest.approx(24 * p.T, rel=1e-12)
     # unstable: the run leaves the orbit, and the caption says after how long, as the
     # map iterated from the scene's start departs by more than the stated tolerance
     z0, k = np.array([run.orbit_x0, run.orbit_v0]), 0

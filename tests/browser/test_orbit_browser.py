@@ -1,6 +1,7 @@
 """Click an orbit in headless Chromium: a tap on a dashed (unstable) branch of the diagram's
 overlay starts the scene views on that orbit. Helpers come from test_app_browser and
 test_diagram_browser (same server fixture)."""
+from conftest import RESULTS
 from test_app_browser import open_app, query, snapshot, text
 from test_diagram_browser import tap
 from test_stability_browser import BRANCHES_READY
@@ -50,3 +51,5 @@ def test_tap_on_an_unstable_branch_shows_its_orbit(page, server):
     page.wait_for_function("() => ie.data('branches_unstable').xs.length > 0", timeout=5_000)
     caption = text(page, "ie-caption")
     assert "orbit at ω" in caption and "periods" in caption, caption
+    RESULTS.mkdir(exist_ok=True)
+    page.screenshot(path=str(RESULTS / "orbit-click.png"))
