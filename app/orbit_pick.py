@@ -217,12 +217,12 @@ def describe(start: OrbitStart, names: dict) -> str:
     o = start.orbit
     mus = ", ".join(_complex(complex(m)) for m in o.multipliers)
     at = ", ".join(f"{sym} = {getattr(o.params, name):g}" for name, sym in names.items())
-    head = (f"**{'Stable' if o.stable else 'Unstable'} {o.label} orbit at {at}**, "
-            f"multipliers {mus}; the run starts on it (t = 0, no transient)")
+    head = f"**{'Stable' if o.stable else 'Unstable'} {o.label} orbit at {at}**"
+    run = "the run starts on it at t = 0, no transient"
     if start.close < start.periods:
-        return (f"{head} and leaves it after ≈ {start.close} periods (section state off by "
-                f"> {LEAVE_RTOL:g} · max(1, |x₀|, |v₀|)).")
-    return f"{head} and stays on it for all {start.periods} periods of the run."
+        return (f"{head}, left after ≈ {start.close} periods; multipliers {mus} ({run}; "
+                f"left: its section state off by > {LEAVE_RTOL:g} · max(1, |x₀|, |v₀|)).")
+    return f"{head}, kept for all {start.periods} periods; multipliers {mus} ({run})."
 
 
 def _complex(z: complex) -> str:

@@ -78,7 +78,7 @@ def test_a_tap_on_an_unstable_branch_starts_the_scene_on_its_orbit(make_explorer
         z0, k = period_map(p, 1, z0), k + 1
     text = e.caption.object
     assert "Unstable 1-impact period-1 orbit at ω = 3" in text, text
-    assert f"leaves it after ≈ {k} periods" in text, (k, text)
+    assert f"left after ≈ {k} periods" in text, (k, text)
     assert 5 < k < 40          # |mu| ~ 4 from 1e-11: about 13 periods
     # the diagram and its branches stay; the link holds the orbit and gives it back
     assert e.diagram.job.generation == diagram_generation
@@ -96,6 +96,17 @@ def test_moving_a_parameter_leaves_the_orbit_and_a_tap_off_the_branches_moves_om
     b, i = unstable_period_one(e, 3.0)
     e.bifurcation._on_tap(tap(b.param[i], b.impact_velocities[i, 0]))
     assert e.run.orbit_x0 is not None
+    # a stable orbit (omega = 2, the paper's Fig. 2) is kept for the whole run: the
+    # section points at t = kT, k = 1 .. floor(500 / T)
+    b2 = next(b for b in e.branches.shown.branches if b.n == 1 and b.impacts == 1
+              and b.param.min() < 2.0 < b.param.max())
+    i = int(np.argmin(np.abs(b2.param - 2.0)))
+    assert b2.stable[i]
+    e.bifurcation._on_tap(tap(b2.param[i], b2.impact_velocities[i, 0]))
+    assert e.run.params.omega == pytest.approx(2.0, abs=0.015) and e.run.orbit_x0 is not None
+    periods = int(e.run.t_end // e.run.params.T)
+    assert f"Stable 1-impact period-1 orbit at ω = {e.run.params.omega:g}" in e.caption.object
+    assert f"kept for all {periods} periods" in e.caption.object, e.caption.object
     e.settings.omega = 2.5
     assert e.run.orbit_x0 is None and e.run.orbit_v0 is None
     assert e.run.scene_start == (None, 0.0, 250.0)
