@@ -71,8 +71,9 @@ def nearest(curves, x: float, y: float, x_span: float, y_span: float):
     for xs, ys, curve in curves:
         d = np.hypot((np.asarray(xs) - x) / (REACH * x_span),
                      (np.asarray(ys) - y) / (REACH * y_span))
-        if d.size and np.nanmin(d) <= best:
-            i = int(np.nanargmin(d))
+        d = np.where(np.isfinite(d), d, np.inf)        # left-out points are never near
+        if d.size and d.min() <= best:
+            i = int(np.argmin(d))
             best, found = float(d[i]), (curve, i)
     return found
 
