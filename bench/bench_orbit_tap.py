@@ -69,6 +69,7 @@ def server_side(n: int) -> list[float]:
 
 
 def page_side(n: int) -> list[float]:
+    from playwright.sync_api import TimeoutError as PlaywrightTimeout
     from playwright.sync_api import sync_playwright
     sys.path.insert(0, str(ROOT / "tests" / "browser"))
     from conftest import CHROMIUM, CHROMIUM_ARGS
@@ -107,16 +108,31 @@ def page_side(n: int) -> list[float]:
                   if (d.xs[i][j] > 2.8 && d.xs[i][j] < 3.3) out.push([d.xs[i][j], d.ys[i][j]]);
                 return out; }""")
             pts.sort()
+            grid = {}                    # one point per 0.01 of omega (the slider's grid)
+            for x, y in pts:
+                grid.setdefault(round(x, 2), (x, y))
+            pts = list(grid.values())
             pick = [pts[i] for i in np.linspace(0, len(pts) - 1, n + 1).round().astype(int)]
             for x, y in pick:
-                old = page.evaluate("() => ie.data('poincare').x[0]")
+                url = page.evaluate("() => location.href")    # as the page writes it
                 px, py = page.evaluate(TO_PAGE, ["bifurcation_figure", x, y])
+                page.wait_for_timeout(800)      # not a double tap with the last one
                 tic = time.perf_counter()
                 page.mouse.click(px, py)
+                try:
+                    page.wait_for_function("(url) => location.href !== url", arg=url,
+                                           timeout=5_000, polling="raf")
+                except PlaywrightTimeout:   # the orbit shown already (a neighbour's grid)
+                    print(f"  no change from a tap at ({x:.4f}, {y:.4f})")
+                    continue
+                if "orbit_x0=" not in page.url:
+                    print(f"  no orbit found at the grid values next to ({x:.4f}, {y:.4f})")
+                    continue
                 page.wait_for_function(
-                    "(old) => { const d = ie.data('poincare'); return d.t[0] === 0 && "
-                    "d.x[0] !== old && location.search.includes('orbit_x0='); }",
-                    arg=old, timeout=20_000, polling="raf")
+                    "() => { const q = new URLSearchParams(location.search); "
+                    "const d = ie.data('poincare'); return d.t[0] === 0 && "
+                    "Math.abs(d.x[0] - Number(q.get('orbit_x0'))) < 1e-9; }",
+                    timeout=20_000, polling="raf")
                 times.append(time.perf_counter() - tic)
             browser.close()
     finally:
