@@ -42,7 +42,8 @@ class MethodResult:
 
 
 def _kwargs(run: Run, method: str, t_end: float) -> dict:
-    return dict(t_end=t_end, t_record=0.0, x0=run.x0, v0=run.v0, method=method,
+    x0, v0, _ = run.scene_start
+    return dict(t_end=t_end, t_record=0.0, x0=x0, v0=v0, method=method,
                 limits=compute.scene_limits(method), **method_options(run, method))
 
 

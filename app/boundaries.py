@@ -23,7 +23,7 @@ import numpy as np
 
 import impactlib as il
 
-from .branches import BranchCache, _follow, on_branch
+from .branches import RANGE_SEEDS, BranchCache, _follow, on_branch, range_seeds
 from .settings import SWEEP_RANGES
 from .stability import exact_run, settled_orbit
 from .state import Run
@@ -31,7 +31,7 @@ from .state import Run
 log = logging.getLogger(__name__)
 
 KINDS = ("period-doubling", "saddle-node", "grazing")
-SEEDS = 6
+SEEDS = RANGE_SEEDS
 BRANCH_POINTS = 300
 MAX_POINTS = 800
 #: Largest move along a curve per step, as a share of the y range (a line on the map).
@@ -78,13 +78,13 @@ def branch_events(req: BoundaryRequest, live, deadline) -> list:
     run, name = req.run, req.name_x
     lo, hi = SWEEP_RANGES[name]
     found, events, seen = [], [], set()
-    for w in np.linspace(lo, hi, SEEDS + 2)[1:-1]:
+    for w in range_seeds(name, count=SEEDS):
         if not live() or time.perf_counter() > deadline:
             break
-        p = run.params.replace(**{name: float(w)})
+        p = run.params.replace(**{name: w})
         orb = settled_orbit(exact_run((p, run.x0, run.v0, run.t_end, run.t_record), None))
         if (orb is None or orb.sticks or not 0 < orb.impacts < math.inf
-                or on_branch(found, orb, name, float(w))):
+                or on_branch(found, orb, name, w)):
             continue
         new = [_follow(p, name, stop, orb.n, orb.x, orb.v, BRANCH_POINTS) for stop in (lo, hi)]
         new = [b for b in new if b is not None and b.param.size > 1]

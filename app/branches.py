@@ -4,7 +4,11 @@ event (period doubling, saddle-node, Neimark-Sacker, grazing).
 
 Seeds come from the finished diagram: each run of consecutive swept values with the
 same number of distinct impact velocities and a negative largest Lyapunov exponent
-(a periodic attractor) gives one seed, its middle value, longest runs first. At a seed
+(a periodic attractor) gives one seed, its middle value, longest runs first; then the
+values the boundary overlay seeds from (``range_seeds``: spread over the parameter's
+default range, as the regime map's), so that every orbit whose events the boundary
+curves follow at the map's y value is a branch here too and the two views show the
+same events. At a seed
 the orbit the motion settles on (``app.stability.settled_orbit``, from the diagram's own
 start and window) is continued down to the range's start and up to its end; at each
 period doubling the doubled branch is continued too. A seed whose orbit lies on a
@@ -27,12 +31,16 @@ import numpy as np
 
 import impactlib as il
 
+from .settings import SWEEP_RANGES
 from .stability import exact_run, settled_orbit
 from .state import Run
 
 log = logging.getLogger(__name__)
 
 MAX_SEEDS = 8
+#: Seeds spread over a parameter's default range (the regime map's), shared with the
+#: boundary overlay (``app.boundaries``).
+RANGE_SEEDS = 6
 MAX_POINTS = 300
 MAX_POINTS_DOUBLED = 150
 #: Periods beyond this are not followed (doubled branches of doubled branches...).
@@ -82,6 +90,15 @@ def seeds(values: np.ndarray, lam: np.ndarray, rows: np.ndarray, drawn_rows: np.
             start = i
     runs.sort(key=lambda r: -r[0])
     return [float(w) for _, w in runs[:max_seeds]]
+
+
+def range_seeds(name: str, lo: float = -math.inf, hi: float = math.inf,
+                count: int | None = None) -> list[float]:
+    """``count`` values (default ``RANGE_SEEDS``) spread over ``name``'s default range
+    (its ends left out), those within [lo, hi]."""
+    a, b = SWEEP_RANGES[name]
+    count = RANGE_SEEDS if count is None else count
+    return [float(w) for w in np.linspace(a, b, count + 2)[1:-1] if lo <= w <= hi]
 
 
 def on_branch(branches, orb, name: str, value: float) -> bool:
@@ -193,6 +210,7 @@ def branches_for(run: Run, diagram: dict, ticket=None) -> BranchSet:
     if hit is not None:
         return hit
     sv = seeds(diagram["values"], diagram["lyapunov"], diagram["omega"], diagram["drawn"])
+    sv += [w for w in range_seeds(run.bif_param, run.bif_min, run.bif_max) if w not in sv]
     result = compute(run, sv, live=(lambda: ticket.live) if ticket is not None else (lambda: True))
     CACHE.put(key, result)
     return result

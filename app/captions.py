@@ -2,11 +2,13 @@
 
 While the settings that change what is computed are those of the scene loaded (or the
 paper's defaults), the caption is that scene's; after a change it is one line naming
-what differs ("**Fig. 2** with ω = 2.75"). Display settings, the branch overlay and the
+what differs ("**Fig. 2** with ω = 2.75"). A run that starts on a periodic orbit (a tap
+on a branch or a boundary curve, ``app.orbit_pick``) is named as that orbit. Display settings, the branch overlay and the
 research settings change nothing in it (``state.differences``).
 """
 from __future__ import annotations
 
+from .orbit_pick import describe
 from .scenes import BY_KEY
 from .settings import BY_NAME
 from .state import differences
@@ -46,3 +48,10 @@ def caption(run, scene: str | None) -> str:
         return BY_KEY[scene].caption if scene else DEFAULT_CAPTION
     return f"**{title(scene)}** with " + ", ".join(
         f"{symbol(n)} = {value_text(n, v)}" for n, v in changed.items())
+
+
+def orbit_caption(run, start) -> str:
+    """The caption of ``run`` starting on a periodic orbit (``orbit_pick.OrbitStart``):
+    the orbit at the diagram's and the regime map's parameters."""
+    names = dict.fromkeys((run.bif_param, run.map_x, run.map_y))
+    return describe(start, {n: symbol(n) for n in names})

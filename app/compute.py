@@ -60,7 +60,7 @@ FIRST_PIXELS = 1000
 
 def first_window(run: Run) -> tuple[float, float]:
     """[start, end] of the time plot when a scene is first shown."""
-    return max(run.t_record, run.t_end - FIRST_PERIODS * run.params.T), run.t_end
+    return max(run.scene_start[2], run.t_end - FIRST_PERIODS * run.params.T), run.t_end
 
 
 def window_samples(period: float, start: float, end: float, pixels: int) -> int:
@@ -252,7 +252,7 @@ def window_columns(run: Run, start: float, end: float, pixels: int) -> dict:
     steps: its impacts are bit for bit those of the scene), simulated up to ``end``.
     """
     p = run.params
-    a, b = max(float(start), run.t_record), min(float(end), run.t_end)
+    a, b = max(float(start), run.scene_start[2]), min(float(end), run.t_end)
     pixels = int(min(max(pixels or 1000, 200), 4000))
     if not b > a:
         return {"t": np.zeros(0), "x": np.zeros(0), "v": np.zeros(0)}

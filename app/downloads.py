@@ -18,7 +18,7 @@ from impactlib.io.header import read_header, settings_lines, write_csv
 
 from .research import attractor_text
 from .settings import SWEEP_RANGES, method_options
-from .state import to_query
+from .state import to_query, url_number
 
 #: Settings written at the top of every CSV file, by URL name.
 HEADER_NAMES = ("m", "c", "k", "g", "r", "omega", "psi", "t_end", "t_record", "method")
@@ -52,10 +52,12 @@ def start_and_section(run) -> dict:
     """Header lines of a scene's file beyond the physics: the start (x0 as used: empty
     means at the wall, max(0, g)), the method's own options, and the section psi in
     both units: time (``psi``, the URL's) and fraction of the period (``psi_over_T``,
-    the page's box)."""
-    x0 = run.x0 if run.x0 is not None else max(0.0, run.params.g)
-    out = {"psi": run.psi, "psi_over_T": run.psi_frac, "x0": x0, "v0": run.v0,
-           "method": run.method}
+    the page's box). A scene started on a periodic orbit is recorded from t = 0 from
+    that orbit's state (``Run.scene_start``)."""
+    x0, v0, t_record = run.scene_start
+    x0 = x0 if x0 is not None else max(0.0, run.params.g)
+    out = {"psi": run.psi, "psi_over_T": run.psi_frac, "x0": x0, "v0": v0,
+           "t_record": url_number(t_record), "method": run.method}
     out.update(method_options(run, run.method))
     return out
 

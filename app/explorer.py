@@ -6,6 +6,9 @@ A settings change is validated into a ``Run``; what it changes decides the work:
   a psi change alone re-samples the Poincaré section only);
 - ``Run.diagram_key``: the diagram job restarts; omega alone only moves its marker;
 - ``stability.readout_key`` (physics, start, window): the stability readout job;
+- ``orbit_x0``, ``orbit_v0`` (a tap on a branch or a boundary curve): the orbit job
+  (``app.orbit_pick``: the orbit the scene starts on, for the caption); a change of the
+  physics or of the diagram's start empties them;
 - ``branches`` on, or a finished diagram while it is on: the branch job (seeded from the
   diagram's chunks; cancelled when the diagram restarts or the overlay is switched off).
 
@@ -25,7 +28,7 @@ from concurrent.futures import ThreadPoolExecutor
 
 import panel as pn
 
-from . import accuracy, captions, compute, stability, state
+from . import accuracy, captions, compute, orbit_pick, stability, state
 from .compare_mode import CompareMode
 from .controls import Controls
 from .downloads import Downloads
@@ -101,6 +104,9 @@ class Explorer(pn.viewable.Viewer):
             "accuracy", lambda run, t: accuracy.to_html(accuracy.compare_methods(run)),
             dispatch, pool=_ACCURACY_POOL if background else None,
             on_result=self._accuracy_done)
+        self.orbit = None                 # (recognise_key, OrbitStart or None) of the last run
+        self.orbit_job = Job("orbit", lambda run, t: orbit_pick.recognise(run), dispatch,
+                             pool=pool, on_result=self._orbit_done)
         self.readout = None               # the stability readout shown (stability.Readout)
         self.stability_job = Job("stability", lambda run, t: stability.readout(run), dispatch,
                                  pool=_STABILITY_POOL if background else None,
@@ -139,7 +145,7 @@ class Explorer(pn.viewable.Viewer):
     def _on_session_destroyed(self, session_context) -> None:
         """The tab is gone: stop its jobs and let the whole session be collected."""
         for job in (self.scene_job, self.window_job, self.accuracy_job, self.stability_job,
-                    self.research.job, self.research.boundary_job):
+                    self.orbit_job, self.research.job, self.research.boundary_job):
             job.cancel()
         self.diagram.cancel()
         self.compare.cancel()
@@ -209,6 +215,11 @@ class Explorer(pn.viewable.Viewer):
         changed = {e.name for e in events}
         st = self.settings
         span = SWEEP_RANGES[st.bif_param]
+        if (changed & state.LEAVES_ORBIT and not changed & state.ORBIT_FIELDS
+                and st.orbit_x0 is not None):
+            # the orbit the scene started on belongs to the settings left
+            self.settings.param.update(orbit_x0=None, orbit_v0=None)
+            return
         if ("bif_param" in changed and not changed & {"bif_min", "bif_max"}
                 and (st.bif_min, st.bif_max) != span):
             # another parameter: its own default range (the nested update applies it)
@@ -237,6 +248,8 @@ class Explorer(pn.viewable.Viewer):
             self.controls.show_stability(None)
             self.stability_job.submit(run)
         previous, self._wanted = self._wanted, run
+        if orbit_pick.recognise_key(run) not in (None, orbit_pick.recognise_key(previous)):
+            self.orbit_job.submit(run)
         if previous is None or run.branches != previous.branches:
             self.diagram.show_branches(run.branches)
         self.scene_job.submit(run)
@@ -329,10 +342,21 @@ class Explorer(pn.viewable.Viewer):
         self.readout = result
         self.controls.show_stability(stability.to_html(result))
 
+    def _orbit_done(self, run, result) -> None:
+        if isinstance(result, Exception):     # never raise into Panel
+            log.warning("orbit check failed: %s: %s", type(result).__name__, result)
+            result = None
+        self.orbit = (orbit_pick.recognise_key(run), result)
+        self._show_caption()
+
     def _show_caption(self) -> None:
         run = self._wanted if self._wanted is not None else self.run
-        if run is not None:
-            self.controls.show_caption(captions.caption(run, self._scene_key))
+        if run is None:
+            return
+        key = orbit_pick.recognise_key(run)
+        start = self.orbit[1] if self.orbit is not None and self.orbit[0] == key else None
+        self.controls.show_caption(captions.caption(run, self._scene_key) if start is None
+                                   else captions.orbit_caption(run, start))
 
     def _message(self, text: str) -> None:
         self.controls.show_message(text, keep=self._keep_message)

@@ -69,7 +69,7 @@ class ResearchPanel:
         from .views._figure import share_helpers
         from .views.boundaries import BoundaryOverlay
         self.views = {MAP: RegimeMapView(), BASINS: BasinsView()}
-        self.overlay = BoundaryOverlay(self.views[MAP].figure)
+        self.overlay = BoundaryOverlay(self.views[MAP], self._pick)
         self.boundary_status = NamedHTML("", model_name="boundaries_status",
                                          css_classes=["ie-boundaries-status"])
         share_helpers([v.figure for v in self.views.values()])

@@ -11,6 +11,10 @@ help text, the widget that edits it, and which results depend on it:
 Settings of the research views (group ``RESEARCH``: regime map, basins) affect nothing
 that is computed automatically: those views compute on demand.
 
+``orbit_x0``, ``orbit_v0`` (both or neither) start the scene alone on a periodic orbit,
+recorded from t = 0; the diagram and the maps keep ``x0``, ``v0``, ``t_record``
+(``state.Run.scene_start``).
+
 A setting that affects none of them switches an extra result on or off (``branches``:
 the branch overlay, computed from the finished diagram; a ``flag``, 1 or 0 in the URL).
 
@@ -162,6 +166,15 @@ SETTINGS: tuple[Setting, ...] = (
             "Time window, start, method", half=True, optional=True),
     Setting("v0", "v₀  initial velocity", 0.0, "Initial velocity ẋ(0).", _EVERYTHING,
             "Time window, start, method", half=True),
+    Setting("orbit_x0", "orbit x₀  on a periodic orbit", None,
+            "The scene starts on a periodic orbit (a tap on a branch or a boundary curve): "
+            "its state (x, ẋ) at t = 0, run with no transient discarded. Empty: the scene "
+            "starts at (x₀, v₀) and discards the transient, as the diagram and the maps "
+            "do (they never use these two).", _TRAJECTORY, "Time window, start, method",
+            half=True, optional=True),
+    Setting("orbit_v0", "orbit v₀  on a periodic orbit", None,
+            "Velocity of the periodic orbit's state at t = 0 (with orbit_x0).", _TRAJECTORY,
+            "Time window, start, method", half=True, optional=True),
     Setting("method", "method", "exact",
             "exact: closed-form flight with exact impact times; rk4: fixed step dt; "
             "rk45: adaptive with rtol/atol.", _TRAJECTORY, "Time window, start, method",

@@ -65,9 +65,11 @@ class Readout:
 
 
 def readout_key(run: Run) -> tuple:
-    """What the readout depends on: the physics, the start and the window (not the
-    scene's integration method, not the section, not the diagram)."""
-    return (run.params, run.x0, run.v0, run.t_end, run.t_record)
+    """What the readout depends on: the physics, the scene's start and window
+    (``Run.scene_start``; not the scene's integration method, not the section, not the
+    diagram)."""
+    x0, v0, t_record = run.scene_start
+    return (run.params, x0, v0, run.t_end, t_record)
 
 
 def repeat_period(px: np.ndarray, pv: np.ndarray, max_period: int = MAX_PERIOD) -> int:

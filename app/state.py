@@ -66,10 +66,27 @@ def _key(self, fields: frozenset) -> tuple:
     return tuple(out)
 
 
+#: Settings that start the scene alone on a periodic orbit (see ``_scene_start``), and
+#: the settings whose change leaves that orbit (the session then empties them).
+ORBIT_FIELDS = frozenset({"orbit_x0", "orbit_v0"})
+LEAVES_ORBIT = frozenset(il.PARAM_NAMES) | {"x0", "v0", "t_record"}
+
+
+def _scene_start(self) -> tuple:
+    """(x0, v0, t_record) of the scene: on the periodic orbit from t = 0 when
+    ``orbit_x0`` and ``orbit_v0`` are set, else the start and window of the diagram."""
+    if self.orbit_x0 is not None:
+        return self.orbit_x0, self.orbit_v0, 0.0
+    return self.x0, self.v0, self.t_record
+
+
 def _scene_key(self) -> tuple:
     """What the trajectory depends on: Params, then the run options as (name, value)
-    pairs named as ``il.simulate`` keywords (not psi, not the diagram range)."""
-    return (self.params,) + _key(self, SCENE_FIELDS - {n for n in il.PARAM_NAMES})
+    pairs named as ``il.simulate`` keywords (not psi, not the diagram range; the start
+    and window are the scene's own, ``scene_start``)."""
+    start = dict(zip(("x0", "v0", "t_record"), self.scene_start))
+    pairs = _key(self, SCENE_FIELDS - {n for n in il.PARAM_NAMES} - ORBIT_FIELDS)
+    return (self.params,) + tuple((n, start.get(n, v)) for n, v in pairs)
 
 
 def _diagram_key(self) -> tuple:
@@ -87,7 +104,8 @@ def _field(name: str) -> str:
 #: (il.Params) and one field per other setting (``psi_frac`` for psi, a fraction of T).
 Run = dataclasses.make_dataclass(
     "Run", [("params", il.Params)] + [(_field(n), object) for n in RUN_FIELDS], frozen=True,
-    namespace={"psi": property(_psi), "scene_key": _scene_key, "diagram_key": _diagram_key,
+    namespace={"psi": property(_psi), "scene_start": property(_scene_start),
+               "scene_key": _scene_key, "diagram_key": _diagram_key,
                "__module__": __name__})
 
 
@@ -185,6 +203,15 @@ def validate(values: Mapping) -> Run:
              f"{clean.get('t_record', 0):g} — must be ≥ 0 and less than the total time "
              f"({clean['t_end']:g} s)")
     _check_sweep_range(clean, errors)
+    if ("orbit_x0" in clean and "orbit_v0" in clean
+            and (clean["orbit_x0"] is None) != (clean["orbit_v0"] is None)):
+        empty = "orbit_x0" if clean["orbit_x0"] is None else "orbit_v0"
+        errors.append(f"{empty}: empty — orbit_x0 and orbit_v0 go together (both set, or "
+                      "both empty)")
+    if clean.get("orbit_x0") is not None and clean.get("g") is not None:
+        need(clean["orbit_x0"] >= clean["g"], "orbit_x0",
+             f"{clean['orbit_x0']:g} — must be ≥ g = {clean['g']:g} (the orbit's state "
+             "lies on the free side)")
     if "map_x" in clean and "map_y" in clean:
         need(clean["map_x"] != clean["map_y"], "map_y",
              f"{clean['map_y']} — must be another parameter than map_x")
@@ -411,7 +438,8 @@ def to_query(run: Run, scene: str | None = None, display: Mapping | None = None)
 
 #: Settings checked together: a refusal of the first may be the other's doing.
 _RELATED = {"t_record": ("t_end",), "bif_max": ("bif_min", "bif_param"),
-            "bif_min": ("bif_param",), "x0": ("g", "bif_max"), "map_y": ("map_x",)}
+            "bif_min": ("bif_param",), "x0": ("g", "bif_max"), "map_y": ("map_x",),
+            "orbit_x0": ("g", "orbit_v0"), "orbit_v0": ("orbit_x0",)}
 
 
 def from_query(args: Mapping[str, object]) -> tuple[dict, str | None, list[str]]:

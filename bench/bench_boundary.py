@@ -7,13 +7,16 @@ The lower curve starts at r = 1 on the period-doubling near omega = 1.255, turns
 near 0.636 and comes back to r = 1 near omega = 1.012: the curve that bends.  The upper
 one runs from r = 1 to r = 0 near omega = 2.65-2.76.  Medians after a warm-up, in one
 process.  Prints only.  ``--quick``: one repeat; ``--overlay``: also the app's boundary
-overlay for the default regime map box (app.boundaries, without its time bound).
+overlay for the default regime map box (app.boundaries, without its time bound), and its
+curves' CPU time with the corrector against its alternative (every column of the whole
+residual by differences, a Jacobian of its own for each tangent).
 
     .venv/bin/python bench/bench_boundary.py [--quick] [--overlay]
 """
 from __future__ import annotations
 
 import argparse
+import math
 import statistics
 import sys
 import time
@@ -76,13 +79,46 @@ def main() -> None:
     print(f"  alternative: {len(r_values)} branches at fixed r, {t_alt:6.3f} s, "
           f"{found} period-doublings (x{t_alt / t_lower:.1f} the curve's time)")
     if args.overlay:
-        overlay()
+        overlay(repeats)
 
 
-def overlay() -> None:
+def full_jacobian(self, y):
+    """The corrector's Jacobian with every (t, u) column by central differences of the
+    whole residual (the alternative to ``CurveSystem.jacobian``, which differentiates only
+    the conditions, at the unknowns they depend on)."""
+    m2 = 2 * self.m
+    H = self.residual(y)
+    J = np.zeros((self.nz - 1, self.nz))
+    J[:m2, :m2] = self.DF
+    for i in range(self.nz):
+        h = (1e-6 * max(1.0, abs(y[i]))) if i >= self.nz - 2 else 1e-7 * (1.0 + abs(y[i]))
+        yp, ym = y.copy(), y.copy()
+        yp[i] += h
+        ym[i] -= h
+        try:
+            hp = self.residual(yp)
+        except ValueError:
+            hp, yp = H, y
+        try:
+            hm = self.residual(ym)
+        except ValueError:
+            hm, ym = H, y
+        col = (hp - hm) / (yp[i] - ym[i])
+        if i < m2:
+            J[m2:, i] = col[m2:]
+        else:
+            J[:, i] = col
+    return H, J
+
+
+def overlay(repeats: int) -> None:
     """The app's boundary overlay for the default regime map box, without its time bound:
-    seconds to the first curve and to all of them (one run)."""
+    seconds to the first curve and to all of them (one run); then its curves alone, CPU
+    time (one thread: less disturbed by other work on a shared machine), with the
+    corrector as it is against the alternative of ``full_jacobian`` and a tangent from a
+    Jacobian of its own at every point, alternated, medians of ``repeats``."""
     from app import boundaries, state
+    from impactlib.analysis import boundary_system as bmod
     boundaries.WALL_TIME = float("inf")
     run = state.validate(state.defaults())
     req = boundaries.BoundaryRequest(run, run.map_x, run.map_y)
@@ -95,6 +131,38 @@ def overlay() -> None:
     print(f"app overlay, default box ({run.map_x} x {run.map_y}, {run.map_y} = "
           f"{getattr(run.params, run.map_y):g} seeds): first curve {first:.2f} s, all "
           f"{total:.2f} s; {last.message}")
+    tic = time.process_time()
+    events = boundaries.branch_events(req, lambda: True, math.inf)
+    seeds = time.process_time() - tic
+    lo, hi = boundaries.SWEEP_RANGES[req.name_y]
+    jobs = [(e, stop) for e in events for stop in (lo, hi)
+            if stop != getattr(e.params, req.name_y)]
+
+    def curves():
+        tic = time.process_time()
+        points = sum(len(il.boundary(e, req.name_y, stop, ds=boundaries.STEP * (hi - lo),
+                                     max_points=boundaries.MAX_POINTS).values)
+                     for e, stop in jobs)
+        return time.process_time() - tic, points
+    jacobian, tangent = bmod.CurveSystem.jacobian, bmod.CurveSystem.tangent
+    times = {"as is": [], "alternative": []}
+    points = {}
+    for _ in range(repeats):
+        for label in times:
+            if label == "alternative":
+                bmod.CurveSystem.jacobian = full_jacobian
+                bmod.CurveSystem.tangent = lambda self, y, t_prev=None, J=None: tangent(self, y, t_prev)
+            try:
+                t, points[label] = curves()
+            finally:
+                bmod.CurveSystem.jacobian, bmod.CurveSystem.tangent = jacobian, tangent
+            times[label].append(t)
+    med = {k: statistics.median(v) for k, v in times.items()}
+    print(f"  seeds and branches: {seeds:.2f} s CPU, {len(events)} events, {len(jobs)} curves")
+    for label in times:
+        print(f"  curves, corrector {label}: {med[label]:.2f} s CPU (median of {repeats}), "
+              f"{points[label]} points")
+    print(f"  ratio: x{med['alternative'] / med['as is']:.2f}")
 
 
 if __name__ == "__main__":

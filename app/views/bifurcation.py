@@ -2,7 +2,8 @@
 (``bif_param``), with a marker at its current value (moving the marker never touches the
 diagram's sources). Independent starts are drawn by the renderer ``bifurcation``; a
 continuation up / down by ``bifurcation_up`` / ``bifurcation_down`` in two colours. A tap
-sets the swept parameter to the tapped value; hovering reads a point out."""
+sets the swept parameter to the tapped value, unless an overlay claims it (a tap on a
+branch: ``claims``); hovering reads a point out."""
 from __future__ import annotations
 
 import math
@@ -49,6 +50,8 @@ class BifurcationView(View):
         self.run: Run | None = None
         self._current_v = np.zeros(0)
         self._pick = None
+        #: Overlays asked first about a tap: claim(event) -> True when they handled it.
+        self.claims: list = []
         self.title = "Bifurcation diagram"
         self.figure = make_figure("bifurcation_figure", "Bifurcation diagram",
                                   AXIS_LABELS["omega"], "impact velocity ẋ(τᵢ−)",
@@ -155,6 +158,8 @@ class BifurcationView(View):
         """A tap sets the swept parameter to the tapped value."""
         run = self.run
         if self._pick is None or run is None or event.x is None:
+            return
+        if any(claim(event) for claim in self.claims):
             return
         self._pick(**{run.bif_param: tap_value(event.x, run.bif_min, run.bif_max,
                                                 run.bif_n)})

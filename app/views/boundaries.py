@@ -1,6 +1,8 @@
 """The boundary curves drawn over the regime map: period-doubling, saddle-node and
 grazing curves (``app.boundaries``), one multi-line renderer per kind, coloured and
-dashed by kind, with an HTML legend (and the computation's status) beside the map."""
+dashed by kind, with an HTML legend (and the computation's status) beside the map. A tap
+on a curve starts the scene on that curve's orbit (``app.orbit_pick``); elsewhere the
+map's own tap applies."""
 from __future__ import annotations
 
 import html
@@ -8,6 +10,7 @@ import html
 from bokeh.models import ColumnDataSource
 
 from ..boundaries import KINDS, BoundarySet
+from ..orbit_pick import pick_on_curve
 
 RENDERERS = {"period-doubling": "boundary_pd", "saddle-node": "boundary_sn",
              "grazing": "boundary_grazing"}
@@ -16,9 +19,13 @@ STYLE = {"period-doubling": ("#d62728", "solid"), "saddle-node": ("#1f3f99", "da
 
 
 class BoundaryOverlay:
-    """Three renderers on ``figure`` (the regime map's), empty until curves arrive."""
+    """Three renderers on the regime map ``view``'s figure, empty until curves arrive;
+    ``pick(**settings)`` is what a tap on a curve does."""
 
-    def __init__(self, figure):
+    def __init__(self, view, pick):
+        self.view, self._pick = view, pick
+        view.claims.append(self.claim)
+        figure = view.figure
         self.sources = {k: ColumnDataSource({"xs": [], "ys": []}) for k in KINDS}
         for kind in KINDS:
             colour, dash = STYLE[kind]
@@ -42,6 +49,20 @@ class BoundaryOverlay:
     def _count(self, kind: str) -> str:
         n = len(self.sources[kind].data["xs"])
         return f"{n} curve{'s' if n != 1 else ''}"
+
+    def claim(self, event) -> bool:
+        """A tap on a drawn curve: the scene starts on its orbit there (True); False
+        where no curve is within reach or no orbit is found (the map's tap applies)."""
+        req = self.view.request
+        if self.curves is None or req is None or event.x is None or event.y is None:
+            return False
+        vx, vy = req.values_x, req.values_y
+        picked = pick_on_curve(self.curves.curves, event.x, event.y,
+                               float(vx[-1] - vx[0]), float(vy[-1] - vy[0]))
+        if picked is None:
+            return False
+        self._pick(**picked.settings)
+        return True
 
     def clear(self, status: str = "") -> None:
         for source in self.sources.values():

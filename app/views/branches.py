@@ -4,7 +4,9 @@ diagram's range (stable solid, unstable dashed) and their events as labelled mar
 It has no figure of its own: its renderers (``branches_stable``, ``branches_unstable``,
 ``branch_events``) are added to the diagram's figure the first time the overlay is
 switched on, so a page without it carries none of their Bokeh models. Each orbit of m
-impacts draws m curves, its impact velocities, in the diagram's coordinates.
+impacts draws m curves, its impact velocities, in the diagram's coordinates. A tap on a
+branch starts the scene on that orbit (``app.orbit_pick``); elsewhere the diagram's own
+tap applies.
 """
 from __future__ import annotations
 
@@ -12,6 +14,7 @@ import numpy as np
 from bokeh.models import ColumnDataSource, LabelSet, Title
 
 from ..branches import SHORT
+from ..orbit_pick import pick_on_branch
 from .base import View
 
 STABLE = "#1b7837"
@@ -74,9 +77,29 @@ class BranchesView(View):
         self.target = None
         self.stable = self.unstable = self.events = self.status = None
         self.renderers: list = []
+        self.shown = None                 # the BranchSet drawn (None: none)
+        self._pick = None
 
     def link(self, views: dict) -> None:
         self.target = views["bifurcation"].figure
+        views["bifurcation"].claims.append(self.claim)
+
+    def connect(self, pick) -> None:
+        self._pick = pick
+
+    def claim(self, event) -> bool:
+        """A tap on a drawn branch: the scene starts on that orbit (True); False where no
+        branch is within reach or no orbit is found there (the diagram's tap applies)."""
+        if self.shown is None or self._pick is None or event.x is None or event.y is None:
+            return False
+        x_span = self.target.x_range.end - self.target.x_range.start
+        ys = [u for b in self.shown.branches for u in b.impact_velocities.ravel()]
+        y_span = max(max(ys) - min(ys), 1e-9) if ys else 1.0
+        picked = pick_on_branch(self.shown.branches, event.x, event.y, x_span, y_span)
+        if picked is None:
+            return False
+        self._pick(**picked.settings)
+        return True
 
     def _build(self) -> None:
         self.stable = ColumnDataSource({"xs": [], "ys": []})
@@ -107,6 +130,7 @@ class BranchesView(View):
             self._build()
         for r in self.renderers:
             r.visible = branches is not None
+        self.shown = None if branches is None or isinstance(branches, str) else branches
         if branches is None or isinstance(branches, str):
             self.stable.data = {"xs": [], "ys": []}
             self.unstable.data = {"xs": [], "ys": []}

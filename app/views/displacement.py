@@ -15,6 +15,10 @@ from ._figure import (IMPACT, LINE, STICK, TIME_SERIES_TOOLS, WALL, auto_range_o
                       make_figure)
 from .base import View
 
+#: A scene started on a periodic orbit opens on its first periods (long enough to see
+#: an unstable orbit followed, then left); other scenes open on compute.first_window.
+ORBIT_PERIODS_SHOWN = 24
+
 
 class DisplacementView(View):
     key = "displacement"
@@ -88,12 +92,15 @@ class DisplacementView(View):
         self.sticking.data = dict(scene.sticking)
         self.wall.location = g
         self.run = run = scene.run
-        # the x axis opens on the last few periods (sampled by the scene's own run);
-        # reset/zoom out shows the whole window
-        start = first_window(run)[0]
-        self.figure.x_range.update(start=start, end=run.t_end, reset_start=start,
-                                   reset_end=run.t_end)
+        # the x axis opens on the last few periods (sampled by the scene's own run) or
+        # on an orbit's first periods; reset/zoom out shows the whole window
+        t_record = run.scene_start[2]
+        if run.orbit_x0 is not None:
+            start, end = t_record, min(run.t_end, t_record + ORBIT_PERIODS_SHOWN * run.params.T)
+        else:
+            start, end = first_window(run)
+        self.figure.x_range.update(start=start, end=end, reset_start=start, reset_end=end)
         self.figure.title.text = "Displacement x(τ)"
-        self.figure.xaxis.axis_label = (f"time τ (s); zoom out: {run.t_record:g}–"
+        self.figure.xaxis.axis_label = (f"time τ (s); zoom out: {t_record:g}–"
                                         f"{run.t_end:g} s")
-        self._ask(run, start, run.t_end, self._pixels())
+        self._ask(run, start, end, self._pixels())

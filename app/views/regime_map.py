@@ -1,6 +1,7 @@
 """Research view: the regime map, the (m, n) class of each cell of a grid over two
 parameters (``map_x`` × ``map_y``), drawn as an image row block by row block, with a
-legend of the classes, a marker at the current point and a tap that moves there."""
+legend of the classes, a marker at the current point and a tap that moves there (unless
+an overlay claims it: a tap on a boundary curve)."""
 from __future__ import annotations
 
 import html
@@ -50,6 +51,8 @@ class RegimeMapView(View):
         self.legend = legend_html([])
         self.rows_done = 0
         self._pick = None
+        #: Overlays asked first about a tap: claim(event) -> True when they handled it.
+        self.claims: list = []
         self._end = ""
         lo_x, hi_x = SWEEP_RANGES["omega"]
         lo_y, hi_y = SWEEP_RANGES["r"]
@@ -134,6 +137,8 @@ class RegimeMapView(View):
         """A tap sets both parameters to the tapped cell's values."""
         req = self.request
         if self._pick is None or req is None or event.x is None or event.y is None:
+            return
+        if any(claim(event) for claim in self.claims):
             return
         self._pick(**{req.name_x: cell_value(event.x, req.values_x),
                       req.name_y: cell_value(event.y, req.values_y)})

@@ -1,3 +1,4 @@
 """Every jitted building block of a run: the closed-form flight (flight), the certified
 impact search, contact and chatter (events), the integrators (integrators), the tangent
-algebra (tangent) and the one event loop that drives them all (engine)."""
+algebra (tangent) and the one event loop that drives them all (engine); a flight's lowest
+point for the boundary curves' grazing tests (grazing)."""

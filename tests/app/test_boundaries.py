@@ -99,3 +99,53 @@ def test_curves_download_as_csv_with_the_header(make_explorer, few_seeds):
         rows = df[df["curve"] == i]
         np.testing.assert_allclose(rows["omega"], b.values[:, 0], rtol=1e-9)
         np.testing.assert_allclose(rows["r"], b.values[:, 1], rtol=1e-9, atol=1e-12)
+
+
+def test_the_diagram_marks_the_events_the_curves_start_from(make_explorer):
+    """At the map's y value (r = 0.8) every curve starts on an event of a branch in x;
+    the diagram's branch overlay (seeded also where the overlay seeds) marks the same
+    event, and a one-parameter continuation at r = 0.8 started off it locates it too,
+    each within 1e-8 in omega. With the overlay's six seeds: the one at omega = 2.9
+    settles on an orbit (9 impacts in 4 periods) that the diagram's own seeds miss."""
+    from app import branches
+    branches.CACHE.clear()
+    boundaries.CACHE.clear()
+    e = make_explorer(map_n="8", boundaries="1", branches="1")
+    assert e.diagram.branch_job.done.wait(300)
+    e.research.compute(MAP)
+    assert e.research.job.done.wait(120) and e.research.boundary_job.done.wait(300)
+    shown = e.branches.shown
+    assert shown is not None and shown.complete, shown
+    marked = {(ev.kind, ev.value) for ev in shown.events}
+    # the markers drawn are those events (a marker per impact velocity; grazing past
+    # an impact at positive speed is not drawn)
+    assert set(e.branches.events.data["x"]) <= {v for _, v in marked}
+    curves = e.research.overlay.curves.curves
+    run = e.run
+    checked = 0
+    for b in curves:
+        w, r = b.values[0]
+        assert r == run.params.r
+        if not run.bif_min < w < run.bif_max:
+            continue
+        near = [v for kind, v in marked if kind == b.kind and abs(v - w) < 1e-8]
+        assert near, (b.kind, b.orbit, w)
+        # il.continuation at r = 0.8 from the same orbit type just beside the event,
+        # across it (a saddle-node has the orbit on one side only; where Newton finds
+        # no such orbit beside it, as in the 9-impact cluster whose events lie within
+        # 2e-5 of each other, the marker check above stands alone)
+        for side in (-0.02, 0.02, -1e-3, 1e-3):
+            p = b.params.replace(omega=w + side)
+            orb = il.periodic_orbit(p, b.n, x0=b.x[0], v0=b.v[0])
+            if orb.converged and orb.impacts == b.impacts:
+                break
+        else:
+            continue
+        br = il.continuation(p, "omega", w - side, n=b.n, x0=orb.x, v0=orb.v,
+                             max_points=400)
+        found = [ev.value for ev in br.events if ev.kind == b.kind]
+        assert any(abs(v - w) < 1e-8 for v in found), (b.kind, b.orbit, w, found)
+        checked += 1
+    assert checked >= 3, checked
+    branches.CACHE.clear()
+    boundaries.CACHE.clear()
