@@ -153,6 +153,23 @@ def release_links(layout) -> None:
 
 
 
+# -- the page's viewport (Panel 1.9.4) ---------------------------------------------------
+
+#: Upstream: the page template of Panel 1.9.4 (``panel/_templates/base.html``, used when
+#: no Panel template is set) has no viewport meta tag, so a phone lays the page out 980 px
+#: wide and zooms out. Panel's own templates carry one (``BasicTemplate.meta_viewport``);
+#: a Bokeh document template given as a string is rendered by Panel as
+#: ``{% extends base %}`` + the string, so this block adds the tag to that page.
+VIEWPORT_TEMPLATE = """{% block preamble %}{{ super() }}
+<meta name="viewport" content="width=device-width, initial-scale=1">
+{% endblock %}"""
+
+
+def add_viewport_tag(doc) -> None:
+    """Serve the page of ``doc`` with ``VIEWPORT_TEMPLATE`` (see there)."""
+    doc.template = VIEWPORT_TEMPLATE
+
+
 # -- a Column laid out as a CSS grid (Panel 1.9.4) ----------------------------------------
 
 #: Stylesheet for a ``pn.Column`` displayed as a CSS grid. Upstream: Panel 1.9.4 renders

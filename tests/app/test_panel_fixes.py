@@ -47,3 +47,19 @@ def test_the_bokehjs_parts_the_reconnect_fix_touches_exist():
     assert "this.session.document.replace_with_json(n)" in bokehjs
     for name in ("client/connection", "protocol/receiver", "document"):
         assert f'"{name}"' in panel_fixes.RECONNECT_JS
+
+
+def test_the_viewport_template_adds_the_tag_panels_page_lacks():
+    """Panel's page template has no viewport meta tag (the upstream gap); rendered as
+    Panel renders a document's string template, ours has exactly one, in the head."""
+    from panel.io.resources import BASE_TEMPLATE
+    from panel.io.server import html_page_for_render_items
+    from bokeh.embed.bundle import Bundle
+
+    tag = 'name="viewport" content="width=device-width, initial-scale=1"'
+    bundle = Bundle(js_files=[], js_raw=[], css_files=[], css_raw=[], hashes={})
+    page = {t: html_page_for_render_items(bundle, {}, [], "t", template=t)
+            for t in (BASE_TEMPLATE, panel_fixes.VIEWPORT_TEMPLATE)}
+    assert "viewport" not in page[BASE_TEMPLATE]
+    ours = page[panel_fixes.VIEWPORT_TEMPLATE]
+    assert ours.count(tag) == 1 and ours.index(tag) < ours.index("</head>")

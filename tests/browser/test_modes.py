@@ -274,3 +274,25 @@ def test_model_count_of_each_mode(page, server):
         counts[mode.lower()] = page.evaluate("Bokeh.documents[0].all_models.size")
     over = {m: n for m, n in counts.items() if n > MODEL_BUDGET[m]}
     assert not over, (counts, MODEL_BUDGET)
+
+
+def test_a_phone_lays_the_page_out_at_its_own_width(browser, server):
+    """A phone (390 x 844, mobile viewport) lays the page out 390 px wide, not 980 px
+    zoomed out: no sideways scroll and ω's box on screen. The same context shows a page
+    without a viewport tag at 980 px, so the emulation is a phone's."""
+    context = browser.new_context(viewport={"width": 390, "height": 844}, is_mobile=True,
+                                  has_touch=True, device_scale_factor=3)
+    try:
+        page = context.new_page()
+        page.set_content("<html><head></head><body><p>no viewport tag</p></body></html>")
+        assert page.evaluate("document.documentElement.clientWidth") == 980
+        page.goto(server.url)
+        page.wait_for_function(READY, timeout=60_000, polling=100)
+        page.wait_for_timeout(1200)
+        assert page.evaluate("document.documentElement.clientWidth") == 390
+        assert page.evaluate("document.documentElement.scrollWidth") <= 390
+        box = page.locator(".ie-w-omega input").first.bounding_box()
+        assert box["x"] >= 0 and box["x"] + box["width"] <= 390, box
+        assert box["y"] >= 0 and box["y"] + box["height"] <= 844, box
+    finally:
+        context.close()
