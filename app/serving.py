@@ -7,7 +7,7 @@ import logging
 from tornado.iostream import StreamClosedError
 from tornado.websocket import WebSocketClosedError
 
-from .panel_fixes import deliver_stranded_writes
+from .panel_fixes import deliver_stranded_writes, lighter_properties
 
 log = logging.getLogger(__name__)
 
@@ -87,3 +87,4 @@ def install() -> None:
     quiet_closed_sockets()
     quiet_rejected_values()
     deliver_stranded_writes()
+    lighter_properties()
