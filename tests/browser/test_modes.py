@@ -296,3 +296,56 @@ def test_a_phone_lays_the_page_out_at_its_own_width(browser, server):
         assert box["y"] >= 0 and box["y"] + box["height"] <= 844, box
     finally:
         context.close()
+
+
+def save_png(page, tmp_path, name):
+    with page.expect_download(timeout=30_000) as info:
+        page.locator(".ie-png button").click()
+    path = tmp_path / name
+    info.value.save_as(path)
+    return path, page.evaluate("window.__iePngLayout")
+
+
+@pytest.mark.parametrize("mode", ["Explore", "Research"])
+def test_png_is_the_mode_laid_out_for_1600_by_900_whatever_the_window(page, server, tmp_path,
+                                                                      mode):
+    """Save PNG at a projector's and at a phone's window gives a 1600 x 900 image of the
+    plot area whose figures have the data areas of a real window 1600 px wide whose plot
+    area is 900 px high (the header's height added, as the export reports it), each
+    drawn (not blank) where the export put it; the page gets its own layout back."""
+    from PIL import Image
+
+    from test_classroom import png_size
+
+    def show(size):
+        open_page(page, server, size, "?omega=2.62")
+        if mode == "Research":
+            show_mode(page, mode)
+            page.wait_for_function(FILLED, arg="regime_map", timeout=90_000)
+            wait_complete(page, "ie-map-status", timeout=90)
+            page.wait_for_timeout(800)
+        return page.evaluate(FRAMES)
+
+    wide = None
+    for size in ((1280, 720), (390, 844)):
+        before = show(size)
+        path, layout = save_png(page, tmp_path, f"{mode}-{size[0]}.png")
+        page.wait_for_timeout(1500)
+        after = page.evaluate(FRAMES)
+        for name, f in before.items():          # the page's own layout is back
+            assert abs(after[name]["w"] - f["w"]) <= 1 and abs(after[name]["h"] - f["h"]) <= 1, \
+                (name, size, f, after[name])
+        if wide is None:
+            assert 0 < layout["top"] < 200, layout
+            wide = show((1600, round(900 + layout["top"])))
+        assert png_size(path.read_bytes()) == (1600, 900) == tuple(layout["size"])
+        assert set(layout["frames"]) == set(wide), (sorted(layout["frames"]), sorted(wide))
+        img = Image.open(path).convert("RGB")
+        for name, got in layout["frames"].items():
+            w, h = got["frame"]
+            assert abs(w - wide[name]["w"]) <= 2 and abs(h - wide[name]["h"]) <= 2, \
+                (name, size, got, wide[name])
+            x, y, bw, bh = got["box"]
+            assert x >= -0.5 and y >= -0.5 and x + bw <= 1600.5 and y + bh <= 900.5, (name, got)
+            colours = img.crop((int(x), int(y), int(x + bw), int(y + bh))).getcolors(1_000_000)
+            assert colours is not None and len(colours) > 20, name      # drawn, not blank
