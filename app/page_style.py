@@ -167,6 +167,16 @@ FILL_CSS = f"""
 :host {{ min-height: 0; min-width: 0 !important; }}
 @media (max-width: {NARROW}px) {{ :host {{ flex-wrap: wrap; }} }}
 """
+#: A research figure and its legend: on a phone the legend goes under the figure, which
+#: keeps the whole width (beside it, the map would be a strip a few dozen px wide).
+FIGURE_ROW_CSS = """
+@media (max-width: 599px) {
+  :host { flex-direction: column !important; flex-wrap: nowrap !important; }
+  :host > * { width: 100% !important; }
+  :host > :first-child { flex: 1 1 0% !important; min-height: 300px; }
+  :host > :not(:first-child) { flex: none !important; }
+}
+"""
 #: A legend beside its figure: scrolls inside the plot area when it is taller.
 LEGEND_CSS = f"""
 :host {{ max-height: calc(100vh - 230px); overflow-y: auto; }}
