@@ -45,6 +45,9 @@ TOP_CSS = f"""
   :host {{ position: sticky !important; top: 0; z-index: 50; box-shadow: 0 1px 4px #0003; }}
 }}
 """
+#: In presenter mode the header shares its line with the bar's four boxes: below 1400 px
+#: the Reset button leaves it (it is there again out of presenter mode), so that the
+#: boxes never overlap the mode switch.
 HEADER_CSS = f"""
 :host {{ flex-wrap: wrap; align-items: center; border-bottom: 1px solid #ddd;
          background: #f6f8fb; min-width: 0 !important; padding: 2px 0; }}
@@ -53,6 +56,9 @@ HEADER_CSS = f"""
   :host(.ie-big) .ie-pin, :host(.ie-big) .ie-png {{ display: none !important; }}
   :host(.ie-big) .ie-scene {{ width: 150px !important; }}
   :host(.ie-big) .ie-notes {{ margin-right: 12px !important; }}
+}}
+@media (min-width: {WIDE}px) and (max-width: 1399px) {{
+  :host(.ie-big) .ie-reset {{ display: none !important; }}
 }}
 """
 BAR_CSS = f"""
