@@ -13,6 +13,7 @@ _HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(_HERE.parent))
 serving = importlib.import_module(f"{_HERE.name}.serving")
 Explorer = importlib.import_module(f"{_HERE.name}.explorer").Explorer
+panel_fixes = importlib.import_module(f"{_HERE.name}.panel_fixes")
 
 
 def create_app() -> Explorer:
@@ -21,6 +22,7 @@ def create_app() -> Explorer:
     # --unused-session-lifetime): settings and views survive a Wi-Fi hiccup
     pn.extension(notifications=False, reconnect=True)
     serving.install()
+    panel_fixes.add_viewport_tag(pn.state.curdoc)
     return Explorer(args=pn.state.session_args)
 
 

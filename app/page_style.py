@@ -20,11 +20,14 @@ NARROW = 899
 WIDE = NARROW + 1
 #: The page fills the window (no page scroll) from 900 px wide: a fixed header and bar,
 #: one information line, and the active mode's plot area taking the rest.
+#: ``ie-png-layout``: the size the PNG export lays the page out at (``PNG_JS``).
 PAGE_CSS = f"""
 :host {{ width: 100vw; height: 100vh !important; overflow: hidden; min-width: 0 !important; }}
 @media (max-width: {NARROW}px) {{
   :host {{ height: auto !important; min-height: 100vh; overflow: visible; }}
 }}
+:host(.ie-png-layout) {{ width: var(--ie-png-width) !important;
+                        height: var(--ie-png-height) !important; }}
 """
 #: The bar (ω, r, c, g) comes first in the page, so that ω's box is the first Tab stop;
 #: the header is drawn above it.
@@ -42,6 +45,9 @@ TOP_CSS = f"""
   :host {{ position: sticky !important; top: 0; z-index: 50; box-shadow: 0 1px 4px #0003; }}
 }}
 """
+#: In presenter mode the header shares its line with the bar's four boxes: below 1400 px
+#: the Reset button leaves it (it is there again out of presenter mode), so that the
+#: boxes never overlap the mode switch.
 HEADER_CSS = f"""
 :host {{ flex-wrap: wrap; align-items: center; border-bottom: 1px solid #ddd;
          background: #f6f8fb; min-width: 0 !important; padding: 2px 0; }}
@@ -50,6 +56,9 @@ HEADER_CSS = f"""
   :host(.ie-big) .ie-pin, :host(.ie-big) .ie-png {{ display: none !important; }}
   :host(.ie-big) .ie-scene {{ width: 150px !important; }}
   :host(.ie-big) .ie-notes {{ margin-right: 12px !important; }}
+}}
+@media (min-width: {WIDE}px) and (max-width: 1399px) {{
+  :host(.ie-big) .ie-reset {{ display: none !important; }}
 }}
 """
 BAR_CSS = f"""
@@ -164,6 +173,16 @@ FILL_CSS = f"""
 :host {{ min-height: 0; min-width: 0 !important; }}
 @media (max-width: {NARROW}px) {{ :host {{ flex-wrap: wrap; }} }}
 """
+#: A research figure and its legend: on a phone the legend goes under the figure, which
+#: keeps the whole width (beside it, the map would be a strip a few dozen px wide).
+FIGURE_ROW_CSS = """
+@media (max-width: 599px) {
+  :host { flex-direction: column !important; flex-wrap: nowrap !important; }
+  :host > * { width: 100% !important; }
+  :host > :first-child { flex: 1 1 0% !important; min-height: 300px; }
+  :host > :not(:first-child) { flex: none !important; }
+}
+"""
 #: A legend beside its figure: scrolls inside the plot area when it is taller.
 LEGEND_CSS = f"""
 :host {{ max-height: calc(100vh - 230px); overflow-y: auto; }}
@@ -210,28 +229,89 @@ MODAL_CSS = """
         border: 1px solid #999; border-radius: 6px; box-shadow: 0 8px 30px #0005;
         padding: 10px; }
 """
-#: Saves every figure on the page as one PNG, drawn where it is on the page (BokehJS
-#: exports each plot's canvas; no server round trip).
-PNG_JS = """
-const views = [...Bokeh.index.query((v) => v.model.constructor.__name__ === "Figure")];
-const boxes = views.map((v) => [v, v.el.getBoundingClientRect()]).filter(([v, b]) => b.width > 0 && b.height > 0);
-if (boxes.length === 0) return;
-const x0 = Math.min(...boxes.map(([v, b]) => b.left)), y0 = Math.min(...boxes.map(([v, b]) => b.top));
-const x1 = Math.max(...boxes.map(([v, b]) => b.right)), y1 = Math.max(...boxes.map(([v, b]) => b.bottom));
-const r = window.devicePixelRatio || 1;
-const canvas = document.createElement("canvas");
-canvas.width = Math.round((x1 - x0 + 16) * r); canvas.height = Math.round((y1 - y0 + 16) * r);
-const ctx = canvas.getContext("2d");
-ctx.fillStyle = "white"; ctx.fillRect(0, 0, canvas.width, canvas.height);
-for (const [v, b] of boxes) {
-  const layer = v.export("png", true);
-  ctx.drawImage(layer.canvas, (b.left - x0 + 8) * r, (b.top - y0 + 8) * r, b.width * r, b.height * r);
-}
-canvas.toBlob((blob) => {
-  const a = document.createElement("a");
-  a.href = URL.createObjectURL(blob);
-  a.download = "impact_explorer.png";
-  document.body.appendChild(a); a.click(); a.remove();
-  setTimeout(() => URL.revokeObjectURL(a.href), 10000);
-}, "image/png");
+#: Size (CSS px) of the canvas the PNG export lays the page out for, whatever the window.
+PNG_SIZE = (1600, 900)
+#: Saves the active mode's figures as one PNG of ``PNG_SIZE`` (times the screen's pixel
+#: ratio), laid out as on a window of that size whatever the window is: for a moment the
+#: page is given that size and the stylesheets' width and height media rules answer as
+#: for it (a phone's one column becomes the projector's grid); then each figure's canvas
+#: is drawn where it sits in the plot area (BokehJS exports each plot; no server round
+#: trip) and the page is given back its window. Laid out twice: once to learn the height
+#: of the header at that width, once with the plot area PNG_SIZE's height. What it laid
+#: out (canvas size, the header's height left out above, each figure's data area and its
+#: box in the canvas) is left in ``window.__iePngLayout``.
+PNG_JS = f"const [W, H] = [{PNG_SIZE[0]}, {PNG_SIZE[1]}];\n" + r"""
+const figures = () => [...Bokeh.index.query((v) => v.model.constructor.__name__ === "Figure")]
+  .map((v) => [v, v.el.getBoundingClientRect()]).filter(([v, b]) => b.width > 0 && b.height > 0);
+const page = [...Bokeh.index.query((v) => (v.model.css_classes || []).includes("ie-page"))][0];
+if (page == null || figures().length === 0) return;
+const sheets = new Set();
+const walk = (root) => {
+  for (const s of [...(root.styleSheets || []), ...(root.adoptedStyleSheets || [])]) sheets.add(s);
+  for (const e of root.querySelectorAll("*")) if (e.shadowRoot) walk(e.shadowRoot);
+};
+walk(document);
+const answers = (text, h) => text.split(",").some((q) => {
+  const parts = [...q.matchAll(/\((min|max)-(width|height):\s*([\d.]+)px\)/g)];
+  return parts.length > 0 && parts.every(([, m, d, v]) => {
+    const size = d === "width" ? W : h;
+    return m === "min" ? size >= +v : size <= +v;
+  });
+});
+const media = [];
+const visit = (rules) => {
+  for (const r of rules) {
+    if (r.media && /(min|max)-(width|height)/.test(r.media.mediaText)) media.push([r, r.media.mediaText]);
+    if (r.cssRules) visit(r.cssRules);
+  }
+};
+for (const s of sheets) { try { visit(s.cssRules); } catch (e) { /* another origin's */ } }
+const el = page.el;
+const layOut = (h) => {
+  for (const [r, text] of media) r.media.mediaText = answers(text, h) ? "all" : "not all";
+  el.style.setProperty("--ie-png-width", `${W}px`);
+  el.style.setProperty("--ie-png-height", `${h}px`);
+  el.classList.add("ie-png-layout");
+};
+const restore = () => {
+  for (const [r, text] of media) r.media.mediaText = text;
+  el.classList.remove("ie-png-layout");
+  el.style.removeProperty("--ie-png-width"); el.style.removeProperty("--ie-png-height");
+};
+const settle = (then) => setTimeout(() => requestAnimationFrame(() => requestAnimationFrame(then)), 700);
+const draw = (top) => {
+  const r = window.devicePixelRatio || 1;
+  const canvas = document.createElement("canvas");
+  canvas.width = Math.round(W * r); canvas.height = Math.round(H * r);
+  const ctx = canvas.getContext("2d");
+  ctx.fillStyle = "white"; ctx.fillRect(0, 0, canvas.width, canvas.height);
+  const origin = el.getBoundingClientRect();
+  const frames = {};
+  for (const [v, b] of figures()) {
+    const layer = v.export("png", true);
+    ctx.drawImage(layer.canvas, (b.left - origin.left) * r, (b.top - origin.top - top) * r,
+                  b.width * r, b.height * r);
+    frames[v.model.name] = {frame: [v.frame.bbox.width, v.frame.bbox.height],
+                            box: [b.left - origin.left, b.top - origin.top - top, b.width, b.height]};
+  }
+  window.__iePngLayout = {size: [W, H], top, frames};
+  return canvas;
+};
+layOut(H);
+settle(() => {
+  const origin = el.getBoundingClientRect().top;
+  const top = Math.max(0, Math.min(...figures().map(([v, b]) => b.top)) - origin - 8);
+  layOut(H + top);
+  settle(() => {
+    let canvas;
+    try { canvas = draw(top); } finally { restore(); }
+    canvas.toBlob((blob) => {
+      const a = document.createElement("a");
+      a.href = URL.createObjectURL(blob);
+      a.download = "impact_explorer.png";
+      document.body.appendChild(a); a.click(); a.remove();
+      setTimeout(() => URL.revokeObjectURL(a.href), 10000);
+    }, "image/png");
+  });
+});
 """

@@ -113,6 +113,80 @@ def tolerate_lost_by_keep_alive() -> None:
     WSHandler.on_close = on_close
 
 
+# -- the cost of a model's properties (Bokeh 3.9.2) --------------------------------------
+
+def _cached_overridden_defaults(cls):
+    found = cls.__dict__.get("_ie_overridden_defaults")
+    if found is None:
+        found = _BOKEH_ORIGINALS["_overridden_defaults"](cls)
+        cls._ie_overridden_defaults = found
+    return found
+
+
+def _selected_properties_with_values(self, query, *, include_defaults=True,
+                                     include_undefined=False):
+    if include_defaults:
+        return _BOKEH_ORIGINALS["query_properties_with_values"](
+            self, query, include_defaults=True, include_undefined=include_undefined)
+    from bokeh.core.has_props import PropertyValueContainer, Undefined
+    from bokeh.core.property.descriptors import UnsetValueError
+
+    themed = self.themed_values() or {}
+    selected = set(self._property_values) | set(self._unstable_default_values) | set(themed)
+    result = {}
+    for key in self.properties(_with_props=True):
+        if key not in selected:                    # upstream reads the value, then skips it
+            continue
+        descriptor = self.lookup(key)
+        if not query(descriptor):
+            continue
+        try:
+            value = descriptor.get_value(self)
+        except UnsetValueError:
+            if not include_undefined:
+                raise
+            value = Undefined
+        if (key not in themed and isinstance(value, PropertyValueContainer)
+                and key in self._unstable_default_values):
+            continue
+        result[key] = value
+    return result
+
+
+_BOKEH_ORIGINALS: dict = {}
+
+
+def lighter_properties(on: bool = True) -> None:
+    """Two shortcuts in Bokeh 3.9.2's property machinery, which takes most of a new
+    session's server CPU (bench/bench_sessions.py --profile; --compare-fixes measures
+    them). Same values, computed once:
+
+    1. ``HasProps._overridden_defaults()`` walks the class's MRO and merges every
+       ``__overridden_defaults__`` on each call, about 50 times per model built or
+       sent; the classes never change, so the merge is kept per class.
+    2. ``HasProps.query_properties_with_values(include_defaults=False)`` (what the
+       document's serialisation calls) reads the default value of every property of the
+       model, then drops those not set: it reads only the ones it keeps.
+
+    tests/app/test_panel_fixes.py checks both give Bokeh's own results for every model
+    of a session's page. ``on=False`` restores Bokeh's functions (for measuring).
+    Idempotent, per process.
+    """
+    from bokeh.core.has_props import HasProps
+
+    if not _BOKEH_ORIGINALS:
+        _BOKEH_ORIGINALS["_overridden_defaults"] = HasProps._overridden_defaults.__func__
+        _BOKEH_ORIGINALS["query_properties_with_values"] = \
+            HasProps.query_properties_with_values
+    if on:
+        HasProps._overridden_defaults = classmethod(_cached_overridden_defaults)
+        HasProps.query_properties_with_values = _selected_properties_with_values
+    else:
+        HasProps._overridden_defaults = classmethod(_BOKEH_ORIGINALS["_overridden_defaults"])
+        HasProps.query_properties_with_values = \
+            _BOKEH_ORIGINALS["query_properties_with_values"]
+
+
 # -- reconnecting to the same session (BokehJS 3.9.2) -------------------------------------
 
 #: Patches of BokehJS's ``ClientConnection``, run in the page once its document is ready.
@@ -185,6 +259,23 @@ def release_links(layout) -> None:
         if id(key) in owned:
             Callback.registry.pop(key, None)
 
+
+
+# -- the page's viewport (Panel 1.9.4) ---------------------------------------------------
+
+#: Upstream: the page template of Panel 1.9.4 (``panel/_templates/base.html``, used when
+#: no Panel template is set) has no viewport meta tag, so a phone lays the page out 980 px
+#: wide and zooms out. Panel's own templates carry one (``BasicTemplate.meta_viewport``);
+#: a Bokeh document template given as a string is rendered by Panel as
+#: ``{% extends base %}`` + the string, so this block adds the tag to that page.
+VIEWPORT_TEMPLATE = """{% block preamble %}{{ super() }}
+<meta name="viewport" content="width=device-width, initial-scale=1">
+{% endblock %}"""
+
+
+def add_viewport_tag(doc) -> None:
+    """Serve the page of ``doc`` with ``VIEWPORT_TEMPLATE`` (see there)."""
+    doc.template = VIEWPORT_TEMPLATE
 
 
 # -- a Column laid out as a CSS grid (Panel 1.9.4) ----------------------------------------

@@ -20,7 +20,7 @@ from . import boundaries, cluster, research
 
 from .controls import NamedHTML
 from .jobs import Job
-from .page_style import FILL_CSS, LEGEND_CSS
+from .page_style import FIGURE_ROW_CSS, FILL_CSS, LEGEND_CSS
 
 log = logging.getLogger(__name__)
 
@@ -118,7 +118,8 @@ class ResearchPanel:
                                  pn.Column(self.legend[kind], self.boundary_status,
                                            curves_csv, width=270)
                                  if kind == MAP else self.legend[kind],
-                                 sizing_mode="stretch_both", stylesheets=[FILL_CSS]),
+                                 sizing_mode="stretch_both",
+                                 stylesheets=[FILL_CSS, FIGURE_ROW_CSS]),
                           sizing_mode="stretch_both", stylesheets=[FILL_CSS])))
         self.tabs = pn.Tabs(*tabs, dynamic=True, sizing_mode="stretch_both",
                             stylesheets=[FILL_CSS])

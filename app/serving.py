@@ -7,7 +7,8 @@ import logging
 from tornado.iostream import StreamClosedError
 from tornado.websocket import WebSocketClosedError
 
-from .panel_fixes import deliver_stranded_writes, tolerate_lost_by_keep_alive
+from .panel_fixes import (deliver_stranded_writes, lighter_properties,
+                          tolerate_lost_by_keep_alive)
 
 log = logging.getLogger(__name__)
 
@@ -88,3 +89,4 @@ def install() -> None:
     quiet_rejected_values()
     deliver_stranded_writes()
     tolerate_lost_by_keep_alive()
+    lighter_properties()

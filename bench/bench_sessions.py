@@ -9,6 +9,11 @@ which follow one warm-up session. CPU is the process's (``time.process_time``: a
 threads, so the diagram worker's share is included); wall time is reported as well.
 
     .venv/bin/python bench/bench_sessions.py [--sessions 10] [--json FILE] [--profile]
+                                             [--compare-fixes]
+
+The served process's workarounds (``app.serving.install``, including
+``panel_fixes.lighter_properties``) are installed as in a server; ``--compare-fixes``
+also alternates sessions with Bokeh's property functions as shipped and reports both.
 
 Run it on a quiet machine; medians are reported. Without a server the scene is
 computed in the caller's thread and results are applied at once (no websocket), so
@@ -83,12 +88,17 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--sessions", type=int, default=10)
     ap.add_argument("--json", type=Path)
+    ap.add_argument("--compare-fixes", action="store_true",
+                    help="also alternate sessions with and without lighter_properties")
     ap.add_argument("--profile", action="store_true",
                     help="also profile the N sessions (cProfile, own time summed by package)")
     args = ap.parse_args(argv)
     import panel as pn
 
+    from app import panel_fixes, serving
+
     pn.extension(notifications=False)
+    serving.install()
     first = one_session()
     one_session()                                   # warm-up
     runs = [one_session() for _ in range(args.sessions)]
@@ -107,11 +117,31 @@ def main(argv=None) -> int:
     for k, v in phases.items():
         print(f"  {v:6.0f} ms  {k}")
     res["phases_ms"] = phases
+    if args.compare_fixes:
+        res["fixes"] = compare_fixes(args.sessions)
+        panel_fixes.lighter_properties(True)
     if args.profile:
         res["profile_share"] = profile(args.sessions)
     if args.json:
         args.json.write_text(json.dumps(res, indent=1))
     return 0
+
+
+def compare_fixes(n: int) -> dict:
+    """CPU per session with Bokeh's property functions as shipped and with
+    ``panel_fixes.lighter_properties``, alternated (``n`` sessions each)."""
+    from app import panel_fixes
+
+    cpu = {"as shipped": [], "lighter_properties": []}
+    for i in range(2 * n):
+        name = list(cpu)[i % 2]
+        panel_fixes.lighter_properties(name != "as shipped")
+        cpu[name].append(one_session()["cpu_ms"])
+    med = {k: statistics.median(v) for k, v in cpu.items()}
+    print(f"alternated, {n} sessions each: CPU median as shipped {med['as shipped']:.0f} ms, "
+          f"with lighter_properties {med['lighter_properties']:.0f} ms "
+          f"(ratio {med['lighter_properties'] / med['as shipped']:.2f})")
+    return med
 
 
 def profile(n: int) -> dict:

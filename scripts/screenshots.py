@@ -6,7 +6,8 @@
 Takes each mode (explore, presenter, compare, research) at 1280 x 720 (a projector),
 1920 x 1080 (a monitor), 768 x 1024 (a tablet) and 390 x 844 (a phone), as the window
 shows it, and the Fig. 4 animation while the mass chatters on the wall. Each PNG is
-reduced to a 256-colour palette to keep the repository small.
+reduced to a 256-colour palette to keep the repository small. The phone's pictures come
+from a mobile viewport (touch, the page's viewport tag in force), as a phone shows them.
 """
 import sys
 from pathlib import Path
@@ -71,11 +72,15 @@ def main(url: str) -> None:
         browser = p.chromium.launch(executable_path="/usr/bin/chromium", headless=True,
                                     args=CHROMIUM_ARGS)
         page = browser.new_page()
+        # the phone as a phone shows it: a mobile viewport (the page's viewport tag counts)
+        phone = browser.new_context(viewport={"width": 390, "height": 844}, is_mobile=True,
+                                    has_touch=True).new_page()
         for mode, query, drawn in MODES:
             for where, size in SIZES.items():
                 wait = None if drawn is None else (
                     lambda p, n=drawn: p.wait_for_function(FILLED, arg=n, timeout=120_000))
-                shoot(page, url + query, f"{mode}-{where}", size, before=wait)
+                shoot(phone if where == "phone" else page, url + query, f"{mode}-{where}",
+                      size, before=wait)
         shoot(page, url + "?scene=fig4", "animation-fig4-chatter", (1280, 720),
               before=chatter)
         browser.close()

@@ -51,32 +51,58 @@ def make_figure(name: str, title: str, x_label: str, y_label: str, **kw):
 
 
 #: Runs in the page: a figure title wider than its frame (a long diagram title in large
-#: type on a projector) is drawn smaller until it fits, never below 11 px (on a phone
-#: the diagram's and the strip's titles are still cut there: Bokeh 3.9.2 draws a title on
-#: one line). Only the drawing changes (a silent set: nothing goes back to the server);
-#: the size the server sets stays the base, so a shorter text or a wider frame gets it
-#: back. Checked twice a second
-#: (text and frame sizes change without an event BokehJS exposes).
+#: type on a projector, any long title on a phone) is drawn smaller until it fits, down to
+#: three quarters of its size (never below 11 px); where it still does not fit, a shorter
+#: text that stays true is drawn instead: first without the settings list (the text
+#: between the first ": " and " — ", which the bar and the drawer show), then without
+#: its " · " counts from the last, each fitted the same way (the last one down to 11 px).
+#: Only the drawing changes (a silent set, then the text property's own change signal for
+#: the title's view: nothing goes back to the server); the text and
+#: size the server sets stay the base, so a wider frame gets them back. Checked twice a
+#: second (text and frame sizes change without an event BokehJS exposes).
 FIT_TITLES_JS = """
 if (!window.__ieFitTitles) {
   window.__ieFitTitles = true
-  const base = new Map(), fitted = new Map()
+  const base = new Map(), fitted = new Map(), text = new Map(), shown = new Map()
   const ctx = document.createElement("canvas").getContext("2d")
   const px = (s) => parseFloat(typeof s === "string" ? s : (s && s.value) || "14")
+  const shorter = (full) => {
+    const out = [full]
+    let t = full
+    const dash = t.indexOf(" — "), colon = t.indexOf(": ")
+    if (colon >= 0 && dash > colon) { t = t.slice(0, colon) + t.slice(dash); out.push(t) }
+    for (let dot = t.lastIndexOf(" · "); dot > 0; dot = t.lastIndexOf(" · ")) {
+      const rest = t.indexOf(" — ", dot)
+      t = t.slice(0, dot) + (rest > dot ? t.slice(rest) : "")
+      out.push(t)
+    }
+    return out
+  }
   const fit = () => {
     for (const v of Bokeh.index.query((v) => v.model.constructor.__name__ === "Figure")) {
       const t = v.model.title
       if (!t || !t.text || v.el.getBoundingClientRect().width === 0) continue
       const now = px(t.text_font_size)
       if (fitted.get(t.id) !== now) base.set(t.id, now)
-      const full = base.get(t.id)
-      ctx.font = `${t.text_font_style} ${full}px ${t.text_font}`
-      const need = ctx.measureText(t.text).width, room = v.frame.bbox.width
-      const size = need > room ? Math.max(11, Math.floor(full * room / need)) : full
-      if (size !== now) {
+      if (shown.get(t.id) !== t.text) text.set(t.id, t.text)
+      const full = base.get(t.id), room = v.frame.bbox.width
+      const texts = shorter(text.get(t.id))
+      let pick = texts[texts.length - 1], size = 11
+      for (const [i, candidate] of texts.entries()) {
+        ctx.font = `${t.text_font_style} ${full}px ${t.text_font}`
+        const need = ctx.measureText(candidate).width
+        const fits = need > room ? Math.floor(full * room / need) : full
+        const least = i === texts.length - 1 ? 11 : Math.max(11, Math.ceil(0.75 * full))
+        if (fits >= least) { pick = candidate; size = fits; break }
+      }
+      if (size !== now || pick !== t.text) {
         fitted.set(t.id, size)
-        t.setv({text_font_size: `${size}px`}, {silent: true})
+        shown.set(t.id, pick)
+        const retext = pick !== t.text
+        t.setv({text_font_size: `${size}px`, text: pick}, {silent: true})
+        if (retext) t.properties.text.change.emit()    // the title's view remakes its text
         v.invalidate_layout()
+        if (retext) setTimeout(() => { t.change.emit(); v.invalidate_layout() }, 100)
       }
     }
   }

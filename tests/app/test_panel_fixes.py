@@ -79,3 +79,61 @@ def test_a_socket_the_keep_alive_let_go_closes_quietly():
     live, notified, lost = handler()
     WSHandler.on_close(live)
     assert notified == [1] and lost == [live.connection]
+
+
+def test_the_viewport_template_adds_the_tag_panels_page_lacks():
+    """Panel's page template has no viewport meta tag (the upstream gap); rendered as
+    Panel renders a document's string template, ours has exactly one, in the head."""
+    from panel.io.resources import BASE_TEMPLATE
+    from panel.io.server import html_page_for_render_items
+    from bokeh.embed.bundle import Bundle
+
+    tag = 'name="viewport" content="width=device-width, initial-scale=1"'
+    bundle = Bundle(js_files=[], js_raw=[], css_files=[], css_raw=[], hashes={})
+    page = {t: html_page_for_render_items(bundle, {}, [], "t", template=t)
+            for t in (BASE_TEMPLATE, panel_fixes.VIEWPORT_TEMPLATE)}
+    assert "viewport" not in page[BASE_TEMPLATE]
+    ours = page[panel_fixes.VIEWPORT_TEMPLATE]
+    assert ours.count(tag) == 1 and ours.index(tag) < ours.index("</head>")
+
+
+def test_lighter_properties_give_bokehs_own_values_for_every_model_of_a_page():
+    """Both shortcuts of ``lighter_properties`` against Bokeh's own functions, model by
+    model over a session's whole page (the shortcut's answer taken first, so a default it
+    failed to create would be missing from Bokeh's answer after it)."""
+    from bokeh.core.has_props import HasProps
+    from bokeh.document import Document
+
+    from app.explorer import Explorer
+
+    doc = Document()
+    doc.add_root(pn.panel(Explorer(args={})).get_root(doc))
+    classes = {type(m) for m in doc.models}
+    try:
+        for m in doc.models:
+            panel_fixes.lighter_properties(True)
+            ours = m.properties_with_values(include_defaults=False)
+            defaults = {c: dict(c._overridden_defaults()) for c in classes}
+            panel_fixes.lighter_properties(False)
+            theirs = m.properties_with_values(include_defaults=False)
+            assert ours.keys() == theirs.keys(), type(m).__name__
+            for k, v in ours.items():
+                assert v is theirs[k] or repr(v) == repr(theirs[k]), (type(m).__name__, k)
+        for c in classes:
+            assert defaults[c] == c._overridden_defaults(), c
+    finally:
+        panel_fixes.lighter_properties(False)
+    assert "_overridden_defaults" in vars(HasProps)
+
+
+def test_the_bokeh_parts_lighter_properties_replaces_are_as_written_for():
+    """The upstream functions the shortcuts replace still read every value before
+    choosing, and merge the MRO on each call; a Bokeh that changed them fails here."""
+    import inspect
+
+    from bokeh.core.has_props import HasProps
+
+    panel_fixes.lighter_properties(False)
+    query = inspect.getsource(HasProps.query_properties_with_values)
+    assert query.index("descriptor.get_value(self)") < query.index("if key not in selected_keys")
+    assert "for c in reversed(cls.__mro__)" in inspect.getsource(HasProps._overridden_defaults)

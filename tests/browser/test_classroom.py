@@ -326,16 +326,14 @@ def test_png_export_is_one_image_of_all_views(page, server, tmp_path):
     info.value.save_as(path)
     data = path.read_bytes()
     width, height = png_size(data)
-    assert width >= 800 and height >= 400
+    assert (width, height) == (1600, 900)
     from PIL import Image
     img = Image.open(path).convert("RGB")
-    # the six figures sit where they are on the page: sample each one's centre region
-    boxes = page.evaluate(BOXES, list(FIGURES))
-    x0 = min(b["left"] for b in boxes.values())
-    y0 = min(b["top"] for b in boxes.values())
-    scale = img.width / (max(b["right"] for b in boxes.values()) - x0 + 16)
-    for n, b in boxes.items():
-        crop = img.crop((int((b["left"] - x0 + 8) * scale), int((b["top"] - y0 + 8) * scale),
-                         int((b["right"] - x0 + 8) * scale), int((b["bottom"] - y0 + 8) * scale)))
-        colours = crop.getcolors(maxcolors=1_000_000)
+    # the six figures, each where the export drew it (tests/browser/test_modes.py checks
+    # that layout against a real window): sample each one's region
+    boxes = page.evaluate("window.__iePngLayout.frames")
+    assert set(FIGURES) <= set(boxes), sorted(boxes)
+    for n in FIGURES:
+        x, y, w, h = boxes[n]["box"]
+        colours = img.crop((int(x), int(y), int(x + w), int(y + h))).getcolors(maxcolors=1_000_000)
         assert colours is not None and len(colours) > 20, n     # drawn, not blank

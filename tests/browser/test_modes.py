@@ -102,17 +102,10 @@ def overlap(a, b) -> bool:
     return min(ar, br) - max(al, bl) > 0.5 and min(ab, bb) - max(at, bt) > 0.5
 
 
-#: Titles still cut below 900 px, by window width: at 11 px, the smallest the page draws,
-#: these titles are wider than their frame (the research pictures' on a tablet too,
-#: where their legend sits beside them).
-CUT = {390: {"bifurcation_figure", "lyapunov_figure", "regime_map_figure", "basins_figure"},
-       768: {"regime_map_figure", "basins_figure"}}
-
-
 def check_layout(page, size, names, scrolls: bool) -> dict:
     """Every figure in ``names`` shown; none overlapping another; no sideways scroll;
-    no clipped title (but those in ``CUT``); with ``scrolls`` False, everything
-    inside the window."""
+    no clipped title (the text drawn no wider than its frame); with ``scrolls`` False,
+    everything inside the window."""
     w, h = size
     frames = page.evaluate(FRAMES)
     missing = [n for n in names if n not in frames]
@@ -126,8 +119,7 @@ def check_layout(page, size, names, scrolls: bool) -> dict:
         assert page.evaluate("document.documentElement.scrollHeight") <= h
         for n in names:
             assert frames[n]["box"][3] <= h + 0.5, (n, frames[n])
-    clipped = [c for c in page.evaluate(CLIPPED) if c[0] not in CUT.get(size[0], ())]
-    assert clipped == []
+    assert page.evaluate(CLIPPED) == []
     return frames
 
 
@@ -140,7 +132,8 @@ def assert_minimum(frames, size):
 @pytest.mark.parametrize("where", list(SIZES))
 def test_explore_sizes_and_presenter(page, server, where):
     """Explore at the four sizes (minimum data areas, no overlap, no sideways scroll, no
-    clipped title); presenter mode keeps 90 % of every data area."""
+    clipped title), then in presenter mode (the same checks; from 900 px wide it keeps
+    90 % of every data area)."""
     size = SIZES[where]
     open_page(page, server, size)
     fits = size[0] >= 900
@@ -148,13 +141,13 @@ def test_explore_sizes_and_presenter(page, server, where):
     assert_minimum(normal, size)
     SHOTS.mkdir(parents=True, exist_ok=True)
     page.screenshot(path=str(SHOTS / f"explore-{where}.png"))
-    if not fits:
-        return
     page.locator(".ie-w-presenter button").click()
     page.wait_for_function("() => ie.model('phase_figure').title.text_font_size !== '14px'",
                            timeout=20_000)
     page.wait_for_timeout(1200)
-    big = check_layout(page, size, EXPLORE, scrolls=False)
+    big = check_layout(page, size, EXPLORE, scrolls=not fits)
+    if not fits:                    # a tablet or phone: one scrolling column, titles fit
+        return
     for n in EXPLORE:
         assert big[n]["w"] >= 0.9 * normal[n]["w"] and big[n]["h"] >= 0.9 * normal[n]["h"], \
             (n, big[n], normal[n])
@@ -274,3 +267,78 @@ def test_model_count_of_each_mode(page, server):
         counts[mode.lower()] = page.evaluate("Bokeh.documents[0].all_models.size")
     over = {m: n for m, n in counts.items() if n > MODEL_BUDGET[m]}
     assert not over, (counts, MODEL_BUDGET)
+
+
+def test_a_phone_lays_the_page_out_at_its_own_width(browser, server):
+    """A phone (390 x 844, mobile viewport) lays the page out 390 px wide, not 980 px
+    zoomed out: no sideways scroll and ω's box on screen. The same context shows a page
+    without a viewport tag at 980 px, so the emulation is a phone's."""
+    context = browser.new_context(viewport={"width": 390, "height": 844}, is_mobile=True,
+                                  has_touch=True, device_scale_factor=3)
+    try:
+        page = context.new_page()
+        page.set_content("<html><head></head><body><p>no viewport tag</p></body></html>")
+        assert page.evaluate("document.documentElement.clientWidth") == 980
+        page.goto(server.url)
+        page.wait_for_function(READY, timeout=60_000, polling=100)
+        page.wait_for_timeout(1200)
+        assert page.evaluate("document.documentElement.clientWidth") == 390
+        assert page.evaluate("document.documentElement.scrollWidth") <= 390
+        box = page.locator(".ie-w-omega input").first.bounding_box()
+        assert box["x"] >= 0 and box["x"] + box["width"] <= 390, box
+        assert box["y"] >= 0 and box["y"] + box["height"] <= 844, box
+    finally:
+        context.close()
+
+
+def save_png(page, tmp_path, name):
+    with page.expect_download(timeout=30_000) as info:
+        page.locator(".ie-png button").click()
+    path = tmp_path / name
+    info.value.save_as(path)
+    return path, page.evaluate("window.__iePngLayout")
+
+
+@pytest.mark.parametrize("mode", ["Explore", "Research"])
+def test_png_is_the_mode_laid_out_for_1600_by_900_whatever_the_window(page, server, tmp_path,
+                                                                      mode):
+    """Save PNG at a projector's and at a phone's window gives a 1600 x 900 image of the
+    plot area whose figures have the data areas of a real window 1600 px wide whose plot
+    area is 900 px high (the header's height added, as the export reports it), each
+    drawn (not blank) where the export put it; the page gets its own layout back."""
+    from PIL import Image
+
+    from test_classroom import png_size
+
+    def show(size):
+        open_page(page, server, size, "?omega=2.62")
+        if mode == "Research":
+            show_mode(page, mode)
+            page.wait_for_function(FILLED, arg="regime_map", timeout=90_000)
+            wait_complete(page, "ie-map-status", timeout=90)
+            page.wait_for_timeout(800)
+        return page.evaluate(FRAMES)
+
+    wide = None
+    for size in ((1280, 720), (390, 844)):
+        before = show(size)
+        path, layout = save_png(page, tmp_path, f"{mode}-{size[0]}.png")
+        page.wait_for_timeout(1500)
+        after = page.evaluate(FRAMES)
+        for name, f in before.items():          # the page's own layout is back
+            assert abs(after[name]["w"] - f["w"]) <= 1 and abs(after[name]["h"] - f["h"]) <= 1, \
+                (name, size, f, after[name])
+        if wide is None:
+            assert 0 < layout["top"] < 200, layout
+            wide = show((1600, round(900 + layout["top"])))
+        assert png_size(path.read_bytes()) == (1600, 900) == tuple(layout["size"])
+        assert set(layout["frames"]) == set(wide), (sorted(layout["frames"]), sorted(wide))
+        img = Image.open(path).convert("RGB")
+        for name, got in layout["frames"].items():
+            w, h = got["frame"]
+            assert abs(w - wide[name]["w"]) <= 2 and abs(h - wide[name]["h"]) <= 2, \
+                (name, size, got, wide[name])
+            x, y, bw, bh = got["box"]
+            assert x >= -0.5 and y >= -0.5 and x + bw <= 1600.5 and y + bh <= 900.5, (name, got)
+            colours = img.crop((int(x), int(y), int(x + bw), int(y + bh))).getcolors(1_000_000)
+            assert colours is not None and len(colours) > 20, name      # drawn, not blank
