@@ -52,7 +52,7 @@ from ..kernels.flight import start_segment, system_constants
 from ..kernels.grazing import lowest_in_flight
 from ..model import FIELDS, PARAM_NAMES, Params
 from .boundary_system import CLEARANCE_SAMPLES, CurveSystem
-from .continuation import Event, locate_on_step
+from .continuation import Event, ds_problems, locate_on_step, stop_problems
 
 KINDS = ("period-doubling", "saddle-node", "grazing")
 COS_TURN = 0.995        # smallest cosine between successive tangents (about 5.7 degrees)
@@ -196,22 +196,8 @@ def _check(event, name, stop, ds, max_points):
     elif not math.isfinite(stop_f):
         problems.append(f"stop={stop!r} is not finite")
     elif ok_event and name in PARAM_NAMES and name != event.name:
-        start = getattr(event.params, name)
-        if stop_f == start:
-            problems.append(f"stop={stop_f!r} equals the start value {name}={start!r}")
-        else:
-            try:
-                event.params.replace(**{name: stop_f})
-            except ValueError as err:
-                problems.append(f"stop={stop_f!r} is outside the valid range of {name} "
-                                f"({str(err).removeprefix('invalid parameters: ')})")
-    if ds is not None:
-        try:
-            dsf = float(ds)
-            if isinstance(ds, bool) or not (math.isfinite(dsf) and dsf > 0):
-                problems.append(f"ds={ds!r} must be a positive number")
-        except (TypeError, ValueError):
-            problems.append(f"ds={ds!r} must be a positive number")
+        problems += stop_problems(event.params, name, stop_f)
+    problems += ds_problems(ds)
     if isinstance(max_points, bool) or not isinstance(max_points, (int, np.integer)) \
             or max_points < 2:
         problems.append(f"max_points={max_points!r} must be a whole number >= 2")

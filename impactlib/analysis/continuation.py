@@ -433,6 +433,30 @@ def locate_on_step(point_at, test, s_hi, f_lo, f_hi):
     return z_best
 
 
+def stop_problems(p, name: str, stop: float) -> list[str]:
+    """What is wrong with following parameter ``name`` of ``p`` to the finite ``stop``."""
+    start = getattr(p, name)
+    if stop == start:
+        return [f"stop={stop!r} equals the start value {name}={start!r}"]
+    try:
+        p.replace(**{name: stop})
+    except ValueError as err:
+        return [f"stop={stop!r} is outside the valid range of {name} "
+                f"({str(err).removeprefix('invalid parameters: ')})"]
+    return []
+
+
+def ds_problems(ds) -> list[str]:
+    """What is wrong with a continuation step ``ds`` (None: the default step)."""
+    if ds is None:
+        return []
+    try:
+        ok = not isinstance(ds, bool) and math.isfinite(float(ds)) and float(ds) > 0
+    except (TypeError, ValueError):
+        ok = False
+    return [] if ok else [f"ds={ds!r} must be a positive number"]
+
+
 def _check_branch(p, name, stop, n, x0, v0, phase, ds, max_points):
     check_start(p, name, n, x0, v0, phase)
     problems = []
@@ -442,21 +466,9 @@ def _check_branch(p, name, stop, n, x0, v0, phase, ds, max_points):
         raise ValueError(f"invalid branch: stop={stop!r} is not a number") from None
     if not math.isfinite(stop_f):
         problems.append(f"stop={stop!r} is not finite")
-    elif stop_f == getattr(p, name):
-        problems.append(f"stop={stop_f!r} equals the start value {name}={getattr(p, name)!r}")
     else:
-        try:
-            p.replace(**{name: stop_f})
-        except ValueError as err:
-            problems.append(f"stop={stop_f!r} is outside the valid range of {name} "
-                            f"({str(err).removeprefix('invalid parameters: ')})")
-    if ds is not None:
-        try:
-            dsf = float(ds)
-            if not (math.isfinite(dsf) and dsf > 0):
-                problems.append(f"ds={ds!r} must be a positive number")
-        except (TypeError, ValueError):
-            problems.append(f"ds={ds!r} must be a positive number")
+        problems += stop_problems(p, name, stop_f)
+    problems += ds_problems(ds)
     if isinstance(max_points, bool) or not isinstance(max_points, (int, np.integer)) or max_points < 2:
         problems.append(f"max_points={max_points!r} must be a whole number >= 2")
     if problems:
