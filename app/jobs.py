@@ -100,12 +100,17 @@ class SessionLoop:
         if not fns:
             return
         with set_curdoc(self.doc), pn.io.hold(self.doc):
-            for fn in fns:
-                try:
-                    fn()
-                except Exception as exc:    # one failed update must not drop the others
-                    log.warning("a session update failed: %s: %s", type(exc).__name__,
-                                str(exc)[:300])
+            run_each(fns)
+
+
+def run_each(fns) -> None:
+    """Call each of ``fns`` in order; one failed update must not drop the others."""
+    for fn in fns:
+        try:
+            fn()
+        except Exception as exc:
+            log.warning("a session update failed: %s: %s", type(exc).__name__,
+                        str(exc)[:300])
 
 
 class KernelLoop:
@@ -144,12 +149,7 @@ class KernelLoop:
     def _drain(self) -> None:
         with self._lock:
             fns, self._queue = self._queue, []
-        for fn in fns:
-            try:
-                fn()
-            except Exception as exc:        # one failed update must not drop the others
-                log.warning("a session update failed: %s: %s", type(exc).__name__,
-                            str(exc)[:300])
+        run_each(fns)
         push_displayed()
 
 
