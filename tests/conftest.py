@@ -1,4 +1,13 @@
-"""Suite-wide ordering."""
+"""Suite-wide ordering and Hypothesis's default profile."""
+import os
+
+from hypothesis import settings
+
+# Derandomized unless HYPOTHESIS_PROFILE says otherwise: every run tries the same
+# examples, so a CI verdict belongs to the code, not to the draw ("explore" draws anew).
+settings.register_profile("ci", derandomize=True)
+settings.register_profile("explore", derandomize=False)
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
 
 _PLAYWRIGHT_FIXTURES = {"page", "browser", "context", "playwright", "browser_type"}
 

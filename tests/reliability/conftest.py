@@ -3,7 +3,7 @@
 Hypothesis profiles (applied per test with ``@settings(settings.get_profile(...))`` so
 they never change other folders' tests): ``reliability`` (the default, modest for a
 2-core CI) and ``reliability-thorough`` (RELIABILITY_PROFILE=thorough, for a longer
-local run).
+local run with fresh draws; the default is derandomized, tests/conftest.py).
 """
 from __future__ import annotations
 
@@ -17,7 +17,8 @@ _COMMON = dict(deadline=None, print_blob=True,
                phases=[Phase.explicit, Phase.reuse, Phase.generate, Phase.target, Phase.shrink],
                suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 settings.register_profile("reliability-ci", max_examples=50, **_COMMON)
-settings.register_profile("reliability-thorough", max_examples=400, **_COMMON)
+settings.register_profile("reliability-thorough", max_examples=400, derandomize=False,
+                          **_COMMON)
 settings.register_profile(
     "reliability",
     settings.get_profile("reliability-thorough"
