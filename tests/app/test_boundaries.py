@@ -149,3 +149,82 @@ def test_the_diagram_marks_the_events_the_curves_start_from(make_explorer):
     assert checked >= 3, checked
     branches.CACHE.clear()
     boundaries.CACHE.clear()
+
+
+def _located(b, k) -> list:
+    """The events of ``b``'s kind that one-parameter continuations in omega at the y value
+    of the curve's point ``k`` locate, each started just beside the point on the curve's
+    orbit type (found from the point's state by il.periodic_orbit) and run across it. On
+    the side of a grazing where the touch is an impact the orbit has one impact more."""
+    w, r = b.values[k]
+    counts = (b.impacts, b.impacts + 1) if b.kind == "grazing" else (b.impacts,)
+    found = []
+    for side in (-1e-3, 1e-3, -0.02, 0.02):
+        p = b.params.replace(omega=w + side, r=r)
+        orb = il.periodic_orbit(p, b.n, x0=b.x[k], v0=b.v[k])
+        if not orb.converged or orb.impacts not in counts:
+            continue
+        br = il.continuation(p, "omega", w - side, n=b.n, x0=orb.x, v0=orb.v,
+                             max_points=400)
+        found += [ev.value for ev in br.events if ev.kind == b.kind]
+    return found
+
+
+def test_curves_of_a_region_off_the_current_line_are_drawn(make_explorer, few_seeds):
+    """With the map's periodic cells as seeds the overlay holds curves that never cross
+    the current line r = 0.8 (islands below or above it), which the branches at r = 0.8
+    cannot start. Reference: at the y value of a point inside such a curve, a
+    one-parameter continuation in omega (il.continuation, started off the curve on the
+    same orbit type, either side, and run across it) locates the same event within 1e-8
+    in omega."""
+    e = make_explorer(map_n="20", boundaries="1")
+    e.research.compute(MAP)
+    assert e.research.job.done.wait(120) and e.research.boundary_job.done.wait(300)
+    shown = e.research.overlay.curves
+    assert shown.complete and not shown.waiting, shown.message
+    assert "regions of the map" in e.research.boundary_status.object
+    # both halves of a curve start on the same event: the curve is their union
+    whole: dict = {}
+    for b in shown.curves:
+        whole.setdefault((b.kind, b.orbit, tuple(b.values[0])), []).append(b)
+    off = [halves for halves in whole.values()
+           if not any(h.values[:, 1].min() <= 0.8 <= h.values[:, 1].max() for h in halves)]
+    assert off, "no curve off the line r = 0.8"
+    checked = 0
+    for halves in off:
+        b = max(halves, key=lambda h: len(h.values))
+        if len(b.values) < 5:
+            continue
+        k = len(b.values) // 2
+        found = _located(b, k)
+        assert any(abs(v - b.values[k, 0]) < 1e-8 for v in found), (b.kind, b.orbit,
+                                                                     b.values[k], found)
+        checked += 1
+    assert checked >= 2, checked
+
+
+def test_an_event_on_a_drawn_curve_is_not_followed_again(few_seeds):
+    """The period-doubling curve of the 1-impact period-1 orbit bends: at r = 0.8 the
+    branch in omega meets it twice (both period-doublings located independently by
+    il.continuation). The overlay draws it once, from one of the two, and it passes the
+    other within 1e-3 of the box."""
+    from app import map_seeds
+    run = state.validate(state.defaults())
+    sets = list(boundaries.compute(boundaries.BoundaryRequest(run, "omega", "r")))
+    pd1 = [b for b in sets[-1].curves
+           if b.kind == "period-doubling" and b.orbit == "1-impact period-1"
+           and 1.0 < b.values[0, 0] < 1.3]
+    starts = {b.values[0, 0] for b in pd1}
+    assert len(starts) == 1 and len(pd1) == 2, [b.values[0] for b in pd1]
+    br = il.continuation(run.params.replace(omega=1.6), "omega", 0.9)
+    both = [ev.value for ev in br.events if ev.kind == "period-doubling"]
+    assert len(both) == 2 and min(abs(v - w) for v in both for w in starts) < 1e-8, both
+    other = next(v for v in both if min(abs(v - w) for w in starts) > 1e-3)
+    pts = np.concatenate([b.values for b in pd1]) / np.array([4.9, 1.0])
+    p = np.array([other, 0.8]) / np.array([4.9, 1.0])
+    seg_a, seg_b = pts[:-1], pts[1:]
+    d = seg_b - seg_a
+    t = np.clip(np.sum((p - seg_a) * d, axis=1) / np.maximum(np.sum(d * d, axis=1), 1e-300),
+                0, 1)
+    assert np.min(np.hypot(*(seg_a + t[:, None] * d - p).T)) < 1e-3
+    assert map_seeds.SAME_POINT >= 1e-3
