@@ -30,15 +30,19 @@ MAP, BASINS = "map", "basins"
 class ResearchPanel:
     """``current()`` gives the session's latest valid settings and the scene shown
     (``(run, scene)``); ``pick(**settings)`` is what taps on the views do; ``dispatch``
-    and ``pool`` are the session's loop and the executor the job runs in."""
+    and ``pool`` are the session's loop and the executor the job runs in;
+    ``on_curves(request, curves)`` hears of each complete set of boundary curves."""
 
-    def __init__(self, widgets: dict, *, dispatch, pool, current, pick, downloads):
+    def __init__(self, widgets: dict, *, dispatch, pool, current, pick, downloads,
+                 on_curves=lambda request, curves: None):
         self._widgets, self._current, self._pick = widgets, current, pick
+        self._on_curves = on_curves
         self._downloads = downloads
         self.job = Job("research", self._work, dispatch, pool=pool)
         self.boundary_job = Job("boundaries", self._boundary_work, dispatch, pool=pool)
         self.overlay = None                 # the boundary curves on the map, once built
         self._boundary_key = None           # key of the curves asked for (None: none)
+        self.boundary_request = None        # the request of the curves asked for
         self._boundary_cells = None         # the map's cells they were asked with
         self._cells = None                  # the cells of the map shown (map_seeds.MapCells)
         self._boundary_where = ""           # where the curves are computed
@@ -296,6 +300,7 @@ class ResearchPanel:
             return
         self._boundary_key = key
         self._boundary_cells = None if req is None else req.cells
+        self.boundary_request = req
         self.boundary_job.cancel()
         self.overlay.clear("" if req is None else "computing…")
         self.boundary_status.object = "" if req is None else self.overlay.legend()
@@ -327,6 +332,8 @@ class ResearchPanel:
     def _boundaries_shown(self, curves) -> None:
         self.overlay.show(curves, self._boundary_where)
         self.boundary_status.object = self.overlay.legend()
+        if curves.complete and self.boundary_request is not None:
+            self._on_curves(self.boundary_request, curves)
         self._cells_ready()
 
     def _cells_ready(self) -> None:

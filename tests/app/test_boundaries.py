@@ -228,3 +228,46 @@ def test_an_event_on_a_drawn_curve_is_not_followed_again(few_seeds):
                 0, 1)
     assert np.min(np.hypot(*(seg_a + t[:, None] * d - p).T)) < 1e-3
     assert map_seeds.SAME_POINT >= 1e-3
+
+
+def test_the_diagram_marks_every_crossing_of_the_curves(make_explorer, monkeypatch):
+    """Each boundary curve crosses the line r = 0.8 where a branch of the diagram's
+    overlay there (il.continuation in omega at r = 0.8, independent of il.boundary) has an
+    event of the curve's kind: the crossings where curves start, a bent curve's second
+    crossing (the 9-impact period-4 grazing curve turns back across the line) and those
+    of curves seeded from the map's regions. The diagram's event lies on the crossing
+    segment of the curve's polyline (within 1e-6), and within 1e-3 of the linear
+    interpolation there (the polyline's chord error)."""
+    import math
+
+    from app import branches
+    monkeypatch.setattr(branches, "WALL_TIME", math.inf)    # complete on a loaded machine
+    branches.CACHE.clear()
+    boundaries.CACHE.clear()
+    e = make_explorer(map_n="20", boundaries="1", branches="1")
+    assert e.diagram.branch_job.done.wait(300)
+    e.research.compute(MAP)
+    assert e.research.job.done.wait(120) and e.research.boundary_job.done.wait(300)
+    assert e.research.overlay.curves.complete, e.research.overlay.curves.message
+    assert e.diagram.branch_job.done.wait(600)
+    shown = e.branches.shown
+    assert shown is not None and shown.complete, shown
+    run = e.run
+    y = run.params.r
+    crossings = starts = 0
+    for b in e.research.overlay.curves.curves:
+        w, r = b.values[:, 0], b.values[:, 1]
+        for i in np.flatnonzero((r[:-1] - y) * (r[1:] - y) <= 0):
+            f = 0.0 if r[i + 1] == r[i] else (y - r[i]) / (r[i + 1] - r[i])
+            xc = w[i] + f * (w[i + 1] - w[i])
+            if not run.bif_min + 1e-3 < xc < run.bif_max - 1e-3:
+                continue
+            lo, hi = sorted((w[i], w[i + 1]))
+            near = [ev.value for ev in shown.events if ev.kind == b.kind
+                    and lo - 1e-6 <= ev.value <= hi + 1e-6 and abs(ev.value - xc) < 1e-3]
+            assert near, (b.kind, b.orbit, xc, b.values[i:i + 2])
+            crossings += 1
+            starts += i == 0 and r[0] == y
+    assert crossings - starts >= 3, (crossings, starts)
+    branches.CACHE.clear()
+    boundaries.CACHE.clear()
