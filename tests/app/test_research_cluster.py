@@ -72,7 +72,8 @@ def pictures(make_explorer):
                 basins=np.array(views[BASINS].image),
                 map_status=e.research.status[MAP].object,
                 basins_status=e.research.status[BASINS].object,
-                curves=[(b.kind, b.values) for b in curves.curves], complete=curves.complete)
+                curves=[(b.kind, b.values) for b in curves.curves], complete=curves.complete,
+                curves_status=e.research.overlay.status)
 
 
 def test_research_views_on_a_cluster_equal_the_local_ones(make_explorer, scheduler,
@@ -90,6 +91,9 @@ def test_research_views_on_a_cluster_equal_the_local_ones(make_explorer, schedul
     where = f"on the Dask cluster at {lc.scheduler_address}"
     assert where in there["map_status"] and where in there["basins_status"]
     assert "Dask" not in here["map_status"] and "complete:" in here["map_status"]
+    # the boundary curves' status says where they were computed, as the map's does
+    assert there["curves_status"].endswith(f" — {where}"), there["curves_status"]
+    assert "Dask" not in here["curves_status"] and "curves from" in here["curves_status"]
     # identical pictures: every cell's class, every start's attractor, every curve
     assert here["map"].shape == (12, 12) and len(np.unique(here["map"])) >= 2
     assert not np.isnan(there["map"]).any()
