@@ -185,7 +185,7 @@ class ResearchPanel:
                 blocks.close()
         except Exception as exc:     # a message on the view, one log line, no traceback
             log.warning("%s failed: %s: %s", kind, type(exc).__name__, exc)
-            ticket.send(self.failed, kind, f"{type(exc).__name__}: {exc}")
+            ticket.send(self.failed, kind, cluster.failure_text(exc, client))
         else:
             ticket.send(self.finished, kind, block)
         ticket.finish()
@@ -320,7 +320,7 @@ class ResearchPanel:
                     break
         except Exception as exc:     # a message under the legend, one log line
             log.warning("boundaries failed: %s: %s", type(exc).__name__, exc)
-            ticket.send(self._boundaries_failed, f"{type(exc).__name__}: {exc}")
+            ticket.send(self._boundaries_failed, cluster.failure_text(exc, client))
         finally:
             sets.close()
         ticket.finish()
