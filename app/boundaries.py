@@ -208,12 +208,14 @@ def compute(req: BoundaryRequest, live=lambda: True, client=None):
             followed.close()
         return True
 
-    first = CACHE.get(dataclasses.replace(req, cells=None).key())
+    cells = req.cells
+    first = None if cells is None else CACHE.get(dataclasses.replace(req, cells=None).key())
     if first is not None:           # the branches' curves, kept from an earlier request
         curves += first.curves
         count.update(done=first.done, total=first.total, events=first.events)
         complete = True
-        yield first
+        yield dataclasses.replace(first, complete=False,
+                                  message=f"{len(curves)} curves; the map's regions next")
     else:
         events = branch_events(req, live, deadline)
         # the first event of each kind, then the rest in order: every kind shows early,
@@ -224,10 +226,11 @@ def compute(req: BoundaryRequest, live=lambda: True, client=None):
         yield BoundarySet((), 0, 2 * len(ordered), False, f"{len(events)} events to follow")
         complete = yield from follow(ordered)
         complete = complete and live()
-        CACHE.put(dataclasses.replace(req, cells=None).key(),
-                  BoundarySet(tuple(curves), count["done"], count["total"], complete,
-                              "", count["events"]))
-    cells = req.cells
+        if cells is not None:       # kept as a request without cells would keep them
+            CACHE.put(dataclasses.replace(req, cells=None).key(),
+                      BoundarySet(tuple(curves), count["done"], count["total"], complete,
+                                  f"{len(curves)} curves from {count['events']} events, "
+                                  f"{time.perf_counter() - tic:.1f} s", count["events"]))
     waiting = complete and cells is not None and not cells.filled and not cells.given_up
     if complete and cells is not None and cells.filled:
         complete = cells.complete

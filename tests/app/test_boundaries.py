@@ -271,3 +271,32 @@ def test_the_diagram_marks_every_crossing_of_the_curves(make_explorer, monkeypat
     assert crossings - starts >= 3, (crossings, starts)
     branches.CACHE.clear()
     boundaries.CACHE.clear()
+
+
+def test_curves_asked_before_the_map_is_done_come_again_with_its_regions(few_seeds):
+    """The overlay never waits for the map: asked while the map runs it ends with the
+    branches' curves and says it is waiting; asked again once the cells are there it
+    starts from those curves (kept for all sessions) and adds the regions' curves, the
+    first ones unchanged; a map that will not finish ends it without the regions."""
+    from app import map_seeds, research
+    run = state.validate({**state.defaults(), "map_n": 16})
+    mreq = research.map_request(run)
+    cells = map_seeds.MapCells(mreq.key())
+    req = boundaries.BoundaryRequest(run, run.map_x, run.map_y, cells)
+    early = list(boundaries.compute(req))[-1]
+    assert early.waiting and not early.complete and early.curves
+    assert all(b.values[0, 1] == run.params.r for b in early.curves)
+    blocks = list(research.map_rows(mreq, wall_time=float("inf")))
+    cells.fill(mreq.values_x, mreq.values_y, np.concatenate([b.impacts for b in blocks]),
+               np.concatenate([b.period for b in blocks]))
+    sets = list(boundaries.compute(req))
+    assert sets[0].curves == early.curves and not sets[0].complete
+    final = sets[-1]
+    assert final.complete and not final.waiting and "regions of the map" in final.message
+    assert final.curves[:len(early.curves)] == early.curves
+    assert len(final.curves) > len(early.curves)
+    lost = map_seeds.MapCells(("another map",))
+    lost.give_up()
+    gone = list(boundaries.compute(boundaries.BoundaryRequest(run, run.map_x, run.map_y,
+                                                              lost)))[-1]
+    assert not gone.complete and not gone.waiting and "did not finish" in gone.message
