@@ -20,7 +20,8 @@ and continued both ways. A seed whose orbit lies on a branch already found is sk
 
 The work is bounded (``MAX_SEEDS`` seeds, ``MAX_POINTS`` points per branch, at most
 ``WALL_TIME`` seconds), checks between continuations whether it is still wanted, and
-complete results are kept for all sessions (LRU by ``Run.diagram_key()``).
+complete results are kept for all sessions (LRU by ``Run.diagram_key()`` and the
+crossings).
 """
 from __future__ import annotations
 
