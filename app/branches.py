@@ -8,15 +8,20 @@ same number of distinct impact velocities and a negative largest Lyapunov expone
 values the boundary overlay seeds from (``range_seeds``: spread over the parameter's
 default range, as the regime map's), so that every orbit whose events the boundary
 curves follow at the map's y value is a branch here too and the two views show the
-same events. At a seed
+same events; last, where the boundary curves on the regime map (``app.boundaries``, when
+its x is the diagram's parameter) cross the line of the current y value, the curve's
+orbit there (``curve_seeds``), so that the diagram marks every crossing, a bent curve's
+second one and those of curves seeded from the map's regions included. At a value seed
 the orbit the motion settles on (``app.stability.settled_orbit``, from the diagram's own
 start and window) is continued down to the range's start and up to its end; at each
-period doubling the doubled branch is continued too. A seed whose orbit lies on a
-branch already found is skipped.
+period doubling the doubled branch is continued too; at a curve's crossing the curve's
+orbit is brought to the line from the curve's points either side of it (continued in y)
+and continued both ways. A seed whose orbit lies on a branch already found is skipped.
 
 The work is bounded (``MAX_SEEDS`` seeds, ``MAX_POINTS`` points per branch, at most
 ``WALL_TIME`` seconds), checks between continuations whether it is still wanted, and
-complete results are kept for all sessions (LRU by ``Run.diagram_key()``).
+complete results are kept for all sessions (LRU by ``Run.diagram_key()`` and the
+crossings).
 """
 from __future__ import annotations
 
@@ -49,6 +54,8 @@ WALL_TIME = 20.0
 #: A seed's orbit whose impact velocities are this close (relative) to a branch's is on it.
 SAME_ORBIT_RTOL = 1e-3
 CACHE_ITEMS = 32
+#: Points of the continuation in y from a curve's point to the diagram's line.
+CROSSING_POINTS = 60
 SHORT = {"period-doubling": "PD", "saddle-node": "SN", "neimark-sacker": "NS",
          "grazing": "graze"}
 
@@ -119,6 +126,25 @@ def on_branch(branches, orb, name: str, value: float) -> bool:
     return False
 
 
+def curve_seeds(curves, name: str, value: float, lo: float, hi: float) -> tuple:
+    """Where boundary ``curves`` (il.Boundary in (``name``, y)) cross y = ``value`` within
+    [lo, hi] of ``name``: one (x, y name, n, ends) per crossing, ``ends`` the (x, y, x0,
+    v0) of the curve's two points either side of the line (orbit states on them)."""
+    seeds = []
+    for b in curves:
+        if b.names[0] != name or len(b.values) < 2:
+            continue
+        w, y = b.values[:, 0], b.values[:, 1]
+        for i in np.flatnonzero((y[:-1] - value) * (y[1:] - value) <= 0):
+            f = 0.0 if y[i + 1] == y[i] else (value - y[i]) / (y[i + 1] - y[i])
+            x = w[i] + f * (w[i + 1] - w[i])
+            if lo <= x <= hi:
+                ends = tuple((float(w[j]), float(y[j]), float(b.x[j]), float(b.v[j]))
+                             for j in (i, i + 1))
+                seeds.append((round(float(x), 10), b.names[1], b.n, ends))
+    return tuple(sorted(set(seeds)))
+
+
 def _follow(p, name, stop, n, x0, v0, max_points):
     """il.continuation, or None where the core refuses the start (e.g. a stop outside
     the parameter's valid range): one branch less, not a failed overlay."""
@@ -129,18 +155,54 @@ def _follow(p, name, stop, n, x0, v0, max_points):
         return None
 
 
-def compute(run: Run, seed_values: list[float], live=lambda: True) -> BranchSet:
+def _crossing_orbits(run: Run, seed: tuple):
+    """(value, orbit) of a curve's crossing ``seed`` (see ``curve_seeds``): the curve's
+    orbit at each of the two points beside the line continued in y, at that point's x,
+    to the line (the region of an orbit can be narrower than a step of the curve, so a
+    start off the curve in x may find another orbit); none where it does not get there
+    (beyond a grazing on the way, say)."""
+    name = run.bif_param
+    _, name_y, n, ends = seed
+    value = getattr(run.params, name_y)
+    for x, y, x0, v0 in ends:
+        if y == value or not run.bif_min <= x <= run.bif_max:
+            continue
+        p = run.params.replace(**{name: x, name_y: y})
+        try:
+            br = il.continuation(p, name_y, value, n=n, x0=x0, v0=v0,
+                                 max_points=CROSSING_POINTS)
+        except ValueError:
+            continue
+        if br.param.size and abs(br.param[-1] - value) <= 1e-12 * max(1.0, abs(value)):
+            orb = il.periodic_orbit(run.params.replace(**{name: x}), n, x0=float(br.x[-1]),
+                                    v0=float(br.v[-1]))
+            if orb.converged and not orb.sticks:
+                yield x, orb
+
+
+def compute(run: Run, seed_values: list[float], live=lambda: True,
+            orbit_seeds: tuple = (), found: tuple = ()) -> BranchSet:
     """Continue the orbits found at ``seed_values`` of the swept parameter
-    ``run.bif_param`` over [run.bif_min, run.bif_max]."""
+    ``run.bif_param`` over [run.bif_min, run.bif_max], then those at boundary curves'
+    crossings ``orbit_seeds`` (``curve_seeds``), besides the branches ``found``."""
     tic = time.perf_counter()
     name = run.bif_param
     lo, hi = run.bif_min, run.bif_max
-    found: list = []
+    found = list(found)
     done = 0
-    for w in seed_values:
+    starts = [(w, None) for w in seed_values] + [(None, s) for s in orbit_seeds]
+    for w, crossing in starts:
         if not live() or time.perf_counter() - tic > WALL_TIME:
             break
         done += 1
+        if crossing is not None:
+            for w, orb in _crossing_orbits(run, crossing):
+                if not on_branch(found, orb, name, w):
+                    p = run.params.replace(**{name: w})
+                    found += [b for b in (_follow(p, name, stop, orb.n, orb.x, orb.v,
+                                                  MAX_POINTS) for stop in (lo, hi))
+                              if b is not None and b.param.size > 1]
+            continue
         p = run.params.replace(**{name: w})
         orb = settled_orbit(exact_run((p, run.x0, run.v0, run.t_end, run.t_record), None))
         if (orb is None or orb.sticks or not 0 < orb.impacts < math.inf
@@ -160,10 +222,10 @@ def compute(run: Run, seed_values: list[float], live=lambda: True) -> BranchSet:
                 d = _follow(e.params, name, stop, 2 * b.n, e.x, e.v, MAX_POINTS_DOUBLED)
                 if d is not None and d.param.size > 1:
                     found.append(d)
-    complete = done == len(seed_values) and live()
+    complete = done == len(starts) and live()
     events = sum(len(b.events) for b in found)
     cut = "" if complete else " (stopped at the time bound)"
-    message = (f"{len(found)} pieces from {done} of {len(seed_values)} seeds, {events} "
+    message = (f"{len(found)} pieces from {done} of {len(starts)} seeds, {events} "
                f"events, {time.perf_counter() - tic:.1f} s{cut}")
     return BranchSet(name, tuple(found), complete, message)
 
@@ -201,16 +263,23 @@ class BranchCache:
 CACHE = BranchCache()
 
 
-def branches_for(run: Run, diagram: dict, ticket=None) -> BranchSet:
+def branches_for(run: Run, diagram: dict, ticket=None, orbit_seeds: tuple = ()) -> BranchSet:
     """The branch set of ``run``'s diagram (``diagram``: the merged chunks, see
-    ``app.diagram.merged``), from the cache or computed (the work of a session's branch
-    job; it stops early once ``ticket`` is no longer live)."""
-    key = run.diagram_key()
+    ``app.diagram.merged``), seeded also at boundary curves' crossings ``orbit_seeds``
+    (``curve_seeds``), from the cache or computed (the work of a session's branch job; it
+    stops early once ``ticket`` is no longer live)."""
+    key = (run.diagram_key(), orbit_seeds)
     hit = CACHE.get(key)
     if hit is not None:
         return hit
-    sv = seeds(diagram["values"], diagram["lyapunov"], diagram["omega"], diagram["drawn"])
-    sv += [w for w in range_seeds(run.bif_param, run.bif_min, run.bif_max) if w not in sv]
-    result = compute(run, sv, live=(lambda: ticket.live) if ticket is not None else (lambda: True))
+    live = (lambda: ticket.live) if ticket is not None else (lambda: True)
+    own = CACHE.get((run.diagram_key(), ()))
+    if own is not None and orbit_seeds:      # the diagram's own branches, and the crossings
+        result = compute(run, [], live, orbit_seeds, own.branches)
+    else:
+        sv = seeds(diagram["values"], diagram["lyapunov"], diagram["omega"], diagram["drawn"])
+        sv += [w for w in range_seeds(run.bif_param, run.bif_min, run.bif_max)
+               if w not in sv]
+        result = compute(run, sv, live, orbit_seeds)
     CACHE.put(key, result)
     return result

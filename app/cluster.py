@@ -7,8 +7,9 @@ threads). Without the setting nothing changes. The server connects once, from a 
 worker thread (never the event loop); an address that cannot be reached, or a server
 without the ``dask`` extra, is said once in the log (one WARNING line) and on every
 picture's status line, and the pictures are computed on the server's threads. A cluster
-that fails during a picture fails that picture with a message; the next one tries it
-again.
+that fails during a picture fails that picture with a message saying so
+(``failure_text``); the next picture connects again, and computes here (with the note)
+if the scheduler is gone.
 """
 from __future__ import annotations
 
@@ -20,6 +21,9 @@ log = logging.getLogger(__name__)
 
 ENV = "IMPACT_DASK_SCHEDULER"
 CONNECT_TIMEOUT = 5.0     # seconds to reach the scheduler
+#: ``distributed.Client.status`` of a client that lost its scheduler (trying to reach it
+#: again, which it gives up on by itself, or closed): a new connection is made instead.
+LOST = ("connecting", "closing", "closed")
 
 
 class Cluster:
@@ -33,8 +37,13 @@ class Cluster:
         self._tried = False
 
     def client(self):
-        """The ``distributed.Client``, or None (the reason is in ``error``)."""
+        """The ``distributed.Client``, or None (the reason is in ``error``). A client that
+        lost its scheduler is dropped and the connection made again."""
         with self._lock:
+            if self._client is not None and self._client.status in LOST:
+                log.warning("%s=%r: the Dask scheduler stopped answering; connecting again",
+                            ENV, self.address)
+                self._client, self._tried, self.error = None, False, ""
             if not self._tried:
                 self._tried = True
                 self._client, self.error = _connect(self.address)
@@ -87,6 +96,18 @@ def current() -> Cluster | None:
         if address not in _SHARED:
             _SHARED[address] = Cluster(address)
         return _SHARED[address]
+
+
+def failure_text(exc: Exception, client) -> str:
+    """What a view says when its picture failed with ``exc``: a picture computed on a
+    cluster (``client`` not None) that failed other than by the core refusing its
+    input (ValueError) lost its cluster midway."""
+    head = f"{type(exc).__name__}: {str(exc)[:200]}"
+    if client is None or isinstance(exc, ValueError):
+        return head
+    return ("the Dask cluster stopped answering during the picture "
+            f"({head}); compute again: the next picture connects again, or is computed "
+            "on this server if the cluster is gone")
 
 
 def client():

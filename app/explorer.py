@@ -10,7 +10,9 @@ A settings change is validated into a ``Run``; what it changes decides the work:
   (``app.orbit_pick``: the orbit the scene starts on, for the caption); a change of the
   physics or of the diagram's start empties them;
 - ``branches`` on, or a finished diagram while it is on: the branch job (seeded from the
-  diagram's chunks; cancelled when the diagram restarts or the overlay is switched off).
+  diagram's chunks; cancelled when the diagram restarts or the overlay is switched off);
+  a complete set of boundary curves on the regime map: their crossings with the
+  diagram's line seed it too (the two views show the same events).
 
 Each job is an ``app.jobs.Job`` (latest request wins, work off the event loop, results
 back on it); each view gets the results it shows through its hooks (app.views.base).
@@ -28,7 +30,7 @@ from concurrent.futures import ThreadPoolExecutor
 
 import panel as pn
 
-from . import accuracy, captions, compute, orbit_pick, stability, state
+from . import accuracy, boundaries, branches, captions, compute, orbit_pick, stability, state
 from .compare_mode import CompareMode
 from .controls import Controls
 from .downloads import Downloads
@@ -98,8 +100,10 @@ class Explorer(pn.viewable.Viewer):
                              pool=pool, on_result=self._scene_done, show_stale=True)
         self.window_job = Job("window", lambda req, t: compute.window_columns(*req), dispatch,
                               pool=pool, on_result=self._window_done)
+        self._curves = None               # (request, set) of the last complete boundary curves
         self.diagram = SessionDiagram(self.views, self.controls, dispatch,
-                                      _BRANCH_POOL if background else None)
+                                      _BRANCH_POOL if background else None,
+                                      curve_seeds=self._curve_seeds)
         self.accuracy_job = Job(
             "accuracy", lambda run, t: accuracy.to_html(accuracy.compare_methods(run)),
             dispatch, pool=_ACCURACY_POOL if background else None,
@@ -115,7 +119,8 @@ class Explorer(pn.viewable.Viewer):
         self.research = ResearchPanel(self.widgets, dispatch=dispatch,
                                       pool=_RESEARCH_POOL if background else None,
                                       current=lambda: (self._wanted, self.scene),
-                                      pick=self.pick, downloads=self.downloads)
+                                      pick=self.pick, downloads=self.downloads,
+                                      on_curves=self._curves_done)
         self.compare = CompareMode(dispatch, pool)
         c.pin_toggle.param.watch(lambda e: self.pin(e.new), "value")
         self.settings.param.watch(self._on_settings, [n for n in QUERY_NAMES
@@ -253,6 +258,28 @@ class Explorer(pn.viewable.Viewer):
         if previous is None or run.branches != previous.branches:
             self.diagram.show_branches(run.branches)
         self.scene_job.submit(run)
+
+    def _curves_done(self, request, curves) -> None:
+        """A complete set of boundary curves on the map: the diagram's branches start
+        from their crossings too, so the two views show the same events."""
+        self._curves = (request, curves)
+        self.diagram.curves_changed()
+
+    def _curve_seeds(self, run) -> tuple:
+        """Crossings of the last complete boundary curves with the diagram's line (the
+        y value of ``run``), when the map's x is the diagram's parameter and the curves
+        are of ``run``'s other settings; () otherwise."""
+        if self._curves is None or run is None:
+            return ()
+        request, curves = self._curves
+        if request.name_x != run.bif_param:
+            return ()
+        mine = boundaries.BoundaryRequest(run, request.name_x, request.name_y)
+        if mine.key()[:-1] != request.key()[:-1]:       # all but the map the cells are of
+            return ()
+        return branches.curve_seeds(curves.curves, run.bif_param,
+                                    getattr(run.params, request.name_y), run.bif_min,
+                                    run.bif_max)
 
     def _on_load(self) -> None:
         """The page is up: results computed so far go out now, the diagram starts."""

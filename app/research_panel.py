@@ -16,7 +16,7 @@ import time
 
 import panel as pn
 
-from . import boundaries, cluster, research
+from . import boundaries, cluster, map_seeds, research
 
 from .controls import NamedHTML
 from .jobs import Job
@@ -30,15 +30,22 @@ MAP, BASINS = "map", "basins"
 class ResearchPanel:
     """``current()`` gives the session's latest valid settings and the scene shown
     (``(run, scene)``); ``pick(**settings)`` is what taps on the views do; ``dispatch``
-    and ``pool`` are the session's loop and the executor the job runs in."""
+    and ``pool`` are the session's loop and the executor the job runs in;
+    ``on_curves(request, curves)`` hears of each complete set of boundary curves."""
 
-    def __init__(self, widgets: dict, *, dispatch, pool, current, pick, downloads):
+    def __init__(self, widgets: dict, *, dispatch, pool, current, pick, downloads,
+                 on_curves=lambda request, curves: None):
         self._widgets, self._current, self._pick = widgets, current, pick
+        self._on_curves = on_curves
         self._downloads = downloads
         self.job = Job("research", self._work, dispatch, pool=pool)
         self.boundary_job = Job("boundaries", self._boundary_work, dispatch, pool=pool)
         self.overlay = None                 # the boundary curves on the map, once built
         self._boundary_key = None           # key of the curves asked for (None: none)
+        self.boundary_request = None        # the request of the curves asked for
+        self._boundary_cells = None         # the map's cells they were asked with
+        self._cells = None                  # the cells of the map shown (map_seeds.MapCells)
+        self._boundary_where = ""           # where the curves are computed
         self.views: dict = {}               # kind -> view, once built
         self.running: str | None = None     # kind being computed
         self._keys: dict = {}               # kind -> key of the request shown
@@ -178,7 +185,7 @@ class ResearchPanel:
                 blocks.close()
         except Exception as exc:     # a message on the view, one log line, no traceback
             log.warning("%s failed: %s: %s", kind, type(exc).__name__, exc)
-            ticket.send(self.failed, kind, f"{type(exc).__name__}: {exc}")
+            ticket.send(self.failed, kind, cluster.failure_text(exc, client))
         else:
             ticket.send(self.finished, kind, block)
         ticket.finish()
@@ -191,6 +198,10 @@ class ResearchPanel:
         self.running = kind
         self._t0 = time.perf_counter()
         self._keys[kind] = request.key()
+        if kind == MAP:
+            if self._cells is not None:
+                self._cells.give_up()
+            self._cells = map_seeds.MapCells(request.key())
         self.views[kind].started(request)
         self.legend[kind].object = self.views[kind].legend
         self.progress[kind].value = 0
@@ -224,6 +235,11 @@ class ResearchPanel:
         text = head if message == "complete" else f"{head} — {message}"
         self.status[kind].object = text + self._at()
         self.views[kind].finished("complete" if complete else "partial")
+        if kind == MAP and self._cells is not None:
+            view = self.views[MAP]
+            self._cells.fill(view.request.values_x, view.request.values_y, view.impacts,
+                             view.period, complete)
+            self._cells_ready()
 
     def failed(self, kind: str, text: str) -> None:
         self.running = None
@@ -231,6 +247,8 @@ class ResearchPanel:
         self.buttons[kind].disabled = False
         self.status[kind].object = f"not computed — {text}{self._at()}"
         self.views[kind].finished("not computed")
+        if kind == MAP and self._cells is not None:
+            self._cells.give_up()
 
     def cancelled(self) -> None:
         """The running computation was stopped (cancel button or superseded)."""
@@ -238,6 +256,8 @@ class ResearchPanel:
         if kind is None:
             return
         view = self.views[kind]
+        if kind == MAP and self._cells is not None:
+            self._cells.give_up()
         self.buttons[kind].disabled = False
         self.status[kind].object = (f"cancelled after {view.rows_done} rows — press "
                                     f"{self.buttons[kind].name!r} to compute again")
@@ -268,14 +288,19 @@ class ResearchPanel:
 
     # -- boundary curves over the map --------------------------------------------------------
 
-    def _draw_boundaries(self, run) -> None:
-        """Boundary curves of the map computed with ``run`` (None: none; a change of
-        request cancels the one under way)."""
-        req = None if run is None else boundaries.BoundaryRequest(run, run.map_x, run.map_y)
+    def _draw_boundaries(self, run, again: bool = False) -> None:
+        """Boundary curves of the map computed with ``run``, seeded also from that map's
+        cells once it is done (None: none; a change of request, or a new computation of
+        the map, cancels the one under way)."""
+        req = None if run is None else boundaries.BoundaryRequest(run, run.map_x, run.map_y,
+                                                                  self._cells)
         key = None if req is None else req.key()
-        if key == self._boundary_key:
+        if (key == self._boundary_key and not again
+                and (req is None or req.cells is self._boundary_cells)):
             return
         self._boundary_key = key
+        self._boundary_cells = None if req is None else req.cells
+        self.boundary_request = req
         self.boundary_job.cancel()
         self.overlay.clear("" if req is None else "computing…")
         self.boundary_status.object = "" if req is None else self.overlay.legend()
@@ -285,7 +310,8 @@ class ResearchPanel:
     def _boundary_work(self, req, ticket) -> None:
         """Stream the boundary curves to the overlay, off the event loop (on the cluster
         when one is set)."""
-        client, _ = cluster.client()
+        client, where = cluster.client()
+        ticket.send(self._boundaries_located, where)
         sets = boundaries.boundary_sets(req, live=lambda: ticket.live, client=client)
         try:
             for curves in sets:
@@ -294,15 +320,32 @@ class ResearchPanel:
                     break
         except Exception as exc:     # a message under the legend, one log line
             log.warning("boundaries failed: %s: %s", type(exc).__name__, exc)
-            ticket.send(self._boundaries_failed, f"{type(exc).__name__}: {exc}")
+            ticket.send(self._boundaries_failed, cluster.failure_text(exc, client))
         finally:
             sets.close()
         ticket.finish()
 
+    def _boundaries_located(self, where: str) -> None:
+        """Where the curves under way are computed (as the map's status says it)."""
+        self._boundary_where = where
+
     def _boundaries_shown(self, curves) -> None:
-        self.overlay.show(curves)
+        self.overlay.show(curves, self._boundary_where)
         self.boundary_status.object = self.overlay.legend()
+        if curves.complete and self.boundary_request is not None:
+            self._on_curves(self.boundary_request, curves)
+        self._cells_ready()
+
+    def _cells_ready(self) -> None:
+        """The curves went without the map's cells (not done then) and the map is done
+        now: ask again with them (the branches' curves come from the shared cache).
+        Called where either can happen last, both on the event loop."""
+        shown = self.overlay.curves if self.overlay is not None else None
+        if (shown is not None and shown.waiting and self._boundary_cells is not None
+                and self._boundary_cells is self._cells and self._cells.filled):
+            self._draw_boundaries(self.views[MAP].request.run, again=True)
 
     def _boundaries_failed(self, text: str) -> None:
-        self.overlay.status = f"not computed — {text}"
+        at = f" — {self._boundary_where}" if self._boundary_where else ""
+        self.overlay.status = f"not computed — {text}{at}"
         self.boundary_status.object = self.overlay.legend()

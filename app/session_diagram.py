@@ -21,13 +21,17 @@ log = logging.getLogger(__name__)
 
 class SessionDiagram:
     """``views`` get the diagram hooks (app.views.base), ``controls`` the status line;
-    ``dispatch`` is the session's loop, ``branch_pool`` the executor of the branch job."""
+    ``dispatch`` is the session's loop, ``branch_pool`` the executor of the branch job;
+    ``curve_seeds(run)`` the crossings of the regime map's boundary curves with the
+    diagram's line (``branches.curve_seeds``), seeds of the branches too."""
 
-    def __init__(self, views, controls, dispatch, branch_pool):
+    def __init__(self, views, controls, dispatch, branch_pool, curve_seeds=lambda run: ()):
         self._views, self._controls = views, controls
+        self._curve_seeds = curve_seeds
+        self._seeded: tuple = ()          # the crossings the branch job was given
         self.job = Job("diagram", self._follow, dispatch)
         self.branch_job = Job("branches",
-                              lambda req, t: branches.branches_for(req[0], req[1], t),
+                              lambda req, t: branches.branches_for(req[0], req[1], t, req[2]),
                               dispatch, pool=branch_pool, on_result=self._branches_done)
         self.class_job = Job("classes",
                              lambda req, t: motion_classes.classify_values(
@@ -68,7 +72,15 @@ class SessionDiagram:
         for view in self._views:
             view.show_branches(text)
         if ready:
-            self.branch_job.submit((self.run, diagram.merged(self.parts)))
+            self._seeded = self._curve_seeds(self.run)
+            self.branch_job.submit((self.run, diagram.merged(self.parts), self._seeded))
+
+    def curves_changed(self) -> None:
+        """New boundary curves on the map: branches from their crossings too, if the
+        overlay is shown and they cross the line elsewhere than before."""
+        if (self._branches and self.end not in (None, "failed") and self.parts
+                and self._curve_seeds(self.run) != self._seeded):
+            self.show_branches(True)
 
     def cancel(self) -> None:
         self.job.cancel()

@@ -7,7 +7,8 @@ The lower curve starts at r = 1 on the period-doubling near omega = 1.255, turns
 near 0.636 and comes back to r = 1 near omega = 1.012: the curve that bends.  The upper
 one runs from r = 1 to r = 0 near omega = 2.65-2.76.  Medians after a warm-up, in one
 process.  Prints only.  ``--quick``: one repeat; ``--overlay``: also the app's boundary
-overlay for the default regime map box (app.boundaries, without its time bound), and its
+overlay for the default regime map box (app.boundaries, without its time bound; seeded
+from the branches alone, then also from the default map's regions), and its
 curves' CPU time with the corrector against its alternative (every column of the whole
 residual by differences, a Jacobian of its own for each tangent).
 
@@ -117,20 +118,32 @@ def overlay(repeats: int) -> None:
     time (one thread: less disturbed by other work on a shared machine), with the
     corrector as it is against the alternative of ``full_jacobian`` and a tangent from a
     Jacobian of its own at every point, alternated, medians of ``repeats``."""
-    from app import boundaries, state
+    from app import boundaries, map_seeds, research, state
     from impactlib.analysis import boundary_system as bmod
     boundaries.WALL_TIME = float("inf")
     run = state.validate(state.defaults())
-    req = boundaries.BoundaryRequest(run, run.map_x, run.map_y)
+    mreq = research.map_request(run)
     tic = time.perf_counter()
-    first, last = None, None
-    for last in boundaries.compute(req):
-        if first is None and last.curves:
-            first = time.perf_counter() - tic
-    total = time.perf_counter() - tic
-    print(f"app overlay, default box ({run.map_x} x {run.map_y}, {run.map_y} = "
-          f"{getattr(run.params, run.map_y):g} seeds): first curve {first:.2f} s, all "
-          f"{total:.2f} s; {last.message}")
+    blocks = list(research.map_rows(mreq, wall_time=float("inf")))
+    print(f"app regime map, default box ({run.map_n} x {run.map_n}): "
+          f"{time.perf_counter() - tic:.2f} s (what the overlay's regions come from)")
+    cells = map_seeds.MapCells.of(mreq.key(), mreq.values_x, mreq.values_y,
+                                  np.concatenate([b.impacts for b in blocks]),
+                                  np.concatenate([b.period for b in blocks]))
+    for label, with_cells in (("branches at the current y only", None),
+                              ("branches and the map's regions", cells)):
+        boundaries.CACHE.clear()
+        req = boundaries.BoundaryRequest(run, run.map_x, run.map_y, with_cells)
+        tic, cpu = time.perf_counter(), time.process_time()
+        first, last = None, None
+        for last in boundaries.compute(req):
+            if first is None and last.curves:
+                first = time.perf_counter() - tic
+        total, cpu = time.perf_counter() - tic, time.process_time() - cpu
+        print(f"app overlay, default box ({run.map_x} x {run.map_y}, {run.map_y} = "
+              f"{getattr(run.params, run.map_y):g}), {label}: first curve {first:.2f} s, all "
+              f"{total:.2f} s ({cpu:.2f} s CPU); {last.message}")
+    req = boundaries.BoundaryRequest(run, run.map_x, run.map_y)
     tic = time.process_time()
     events = boundaries.branch_events(req, lambda: True, math.inf)
     seeds = time.process_time() - tic

@@ -70,9 +70,13 @@ class BoundaryOverlay:
         self.status = status
         self.curves = None
 
-    def show(self, curves: BoundarySet) -> None:
+    def show(self, curves: BoundarySet, where: str = "") -> None:
+        """Draw ``curves``; ``where`` they are computed goes on the status line ("" when
+        no cluster is set, as on the map's)."""
         for kind in KINDS:
             xs, ys = curves.lines(kind)
             self.sources[kind].data = {"xs": xs, "ys": ys}
-        self.status = curves.message if curves.complete else f"computing… {curves.message}"
+        at = f" — {where}" if where else ""
+        self.status = (curves.message if curves.complete
+                       else f"computing… {curves.message}") + at
         self.curves = curves

@@ -149,3 +149,154 @@ def test_the_diagram_marks_the_events_the_curves_start_from(make_explorer):
     assert checked >= 3, checked
     branches.CACHE.clear()
     boundaries.CACHE.clear()
+
+
+def _located(b, k) -> list:
+    """The events of ``b``'s kind that one-parameter continuations in omega at the y value
+    of the curve's point ``k`` locate, each started just beside the point on the curve's
+    orbit type (found from the point's state by il.periodic_orbit) and run across it. On
+    the side of a grazing where the touch is an impact the orbit has one impact more."""
+    w, r = b.values[k]
+    counts = (b.impacts, b.impacts + 1) if b.kind == "grazing" else (b.impacts,)
+    found = []
+    for side in (-1e-3, 1e-3, -0.02, 0.02):
+        p = b.params.replace(omega=w + side, r=r)
+        orb = il.periodic_orbit(p, b.n, x0=b.x[k], v0=b.v[k])
+        if not orb.converged or orb.impacts not in counts:
+            continue
+        br = il.continuation(p, "omega", w - side, n=b.n, x0=orb.x, v0=orb.v,
+                             max_points=400)
+        found += [ev.value for ev in br.events if ev.kind == b.kind]
+    return found
+
+
+def test_curves_of_a_region_off_the_current_line_are_drawn(make_explorer, few_seeds):
+    """With the map's periodic cells as seeds the overlay holds curves that never cross
+    the current line r = 0.8 (islands below or above it), which the branches at r = 0.8
+    cannot start. Reference: at the y value of a point inside such a curve, a
+    one-parameter continuation in omega (il.continuation, started off the curve on the
+    same orbit type, either side, and run across it) locates the same event within 1e-8
+    in omega."""
+    e = make_explorer(map_n="20", boundaries="1")
+    e.research.compute(MAP)
+    assert e.research.job.done.wait(120) and e.research.boundary_job.done.wait(300)
+    shown = e.research.overlay.curves
+    assert shown.complete and not shown.waiting, shown.message
+    assert "regions of the map" in e.research.boundary_status.object
+    # both halves of a curve start on the same event: the curve is their union
+    whole: dict = {}
+    for b in shown.curves:
+        whole.setdefault((b.kind, b.orbit, tuple(b.values[0])), []).append(b)
+    off = [halves for halves in whole.values()
+           if not any(h.values[:, 1].min() <= 0.8 <= h.values[:, 1].max() for h in halves)]
+    assert off, "no curve off the line r = 0.8"
+    checked = 0
+    for halves in off:
+        b = max(halves, key=lambda h: len(h.values))
+        if len(b.values) < 5:
+            continue
+        k = len(b.values) // 2
+        found = _located(b, k)
+        assert any(abs(v - b.values[k, 0]) < 1e-8 for v in found), (b.kind, b.orbit,
+                                                                     b.values[k], found)
+        checked += 1
+    assert checked >= 2, checked
+
+
+def test_an_event_on_a_drawn_curve_is_not_followed_again(few_seeds):
+    """The period-doubling curve of the 1-impact period-1 orbit bends: at r = 0.8 the
+    branch in omega meets it twice (both period-doublings located independently by
+    il.continuation). The overlay draws it once, from one of the two, and it passes the
+    other within 1e-3 of the box."""
+    from app import map_seeds
+    run = state.validate(state.defaults())
+    sets = list(boundaries.compute(boundaries.BoundaryRequest(run, "omega", "r")))
+    pd1 = [b for b in sets[-1].curves
+           if b.kind == "period-doubling" and b.orbit == "1-impact period-1"
+           and 1.0 < b.values[0, 0] < 1.3]
+    starts = {b.values[0, 0] for b in pd1}
+    assert len(starts) == 1 and len(pd1) == 2, [b.values[0] for b in pd1]
+    br = il.continuation(run.params.replace(omega=1.6), "omega", 0.9)
+    both = [ev.value for ev in br.events if ev.kind == "period-doubling"]
+    assert len(both) == 2 and min(abs(v - w) for v in both for w in starts) < 1e-8, both
+    other = next(v for v in both if min(abs(v - w) for w in starts) > 1e-3)
+    pts = np.concatenate([b.values for b in pd1]) / np.array([4.9, 1.0])
+    p = np.array([other, 0.8]) / np.array([4.9, 1.0])
+    seg_a, seg_b = pts[:-1], pts[1:]
+    d = seg_b - seg_a
+    t = np.clip(np.sum((p - seg_a) * d, axis=1) / np.maximum(np.sum(d * d, axis=1), 1e-300),
+                0, 1)
+    assert np.min(np.hypot(*(seg_a + t[:, None] * d - p).T)) < 1e-3
+    assert map_seeds.SAME_POINT >= 1e-3
+
+
+def test_the_diagram_marks_every_crossing_of_the_curves(make_explorer, monkeypatch):
+    """Each boundary curve crosses the line r = 0.8 where a branch of the diagram's
+    overlay there (il.continuation in omega at r = 0.8, independent of il.boundary) has an
+    event of the curve's kind: the crossings where curves start, a bent curve's second
+    crossing (the 9-impact period-4 grazing curve turns back across the line) and those
+    of curves seeded from the map's regions. The diagram's event lies on the crossing
+    segment of the curve's polyline (within 1e-6), and within 1e-3 of the linear
+    interpolation there (the polyline's chord error)."""
+    import math
+
+    from app import branches
+    monkeypatch.setattr(branches, "WALL_TIME", math.inf)    # complete on a loaded machine
+    branches.CACHE.clear()
+    boundaries.CACHE.clear()
+    e = make_explorer(map_n="20", boundaries="1", branches="1")
+    assert e.diagram.branch_job.done.wait(300)
+    e.research.compute(MAP)
+    assert e.research.job.done.wait(120) and e.research.boundary_job.done.wait(300)
+    assert e.research.overlay.curves.complete, e.research.overlay.curves.message
+    assert e.diagram.branch_job.done.wait(600)
+    shown = e.branches.shown
+    assert shown is not None and shown.complete, shown
+    run = e.run
+    y = run.params.r
+    crossings = starts = 0
+    for b in e.research.overlay.curves.curves:
+        w, r = b.values[:, 0], b.values[:, 1]
+        for i in np.flatnonzero((r[:-1] - y) * (r[1:] - y) <= 0):
+            f = 0.0 if r[i + 1] == r[i] else (y - r[i]) / (r[i + 1] - r[i])
+            xc = w[i] + f * (w[i + 1] - w[i])
+            if not run.bif_min + 1e-3 < xc < run.bif_max - 1e-3:
+                continue
+            lo, hi = sorted((w[i], w[i + 1]))
+            near = [ev.value for ev in shown.events if ev.kind == b.kind
+                    and lo - 1e-6 <= ev.value <= hi + 1e-6 and abs(ev.value - xc) < 1e-3]
+            assert near, (b.kind, b.orbit, xc, b.values[i:i + 2])
+            crossings += 1
+            starts += i == 0 and r[0] == y
+    assert crossings - starts >= 3, (crossings, starts)
+    branches.CACHE.clear()
+    boundaries.CACHE.clear()
+
+
+def test_curves_asked_before_the_map_is_done_come_again_with_its_regions(few_seeds):
+    """The overlay never waits for the map: asked while the map runs it ends with the
+    branches' curves and says it is waiting; asked again once the cells are there it
+    starts from those curves (kept for all sessions) and adds the regions' curves, the
+    first ones unchanged; a map that will not finish ends it without the regions."""
+    from app import map_seeds, research
+    run = state.validate({**state.defaults(), "map_n": 16})
+    mreq = research.map_request(run)
+    cells = map_seeds.MapCells(mreq.key())
+    req = boundaries.BoundaryRequest(run, run.map_x, run.map_y, cells)
+    early = list(boundaries.compute(req))[-1]
+    assert early.waiting and not early.complete and early.curves
+    assert all(b.values[0, 1] == run.params.r for b in early.curves)
+    blocks = list(research.map_rows(mreq, wall_time=float("inf")))
+    cells.fill(mreq.values_x, mreq.values_y, np.concatenate([b.impacts for b in blocks]),
+               np.concatenate([b.period for b in blocks]))
+    sets = list(boundaries.compute(req))
+    assert sets[0].curves == early.curves and not sets[0].complete
+    final = sets[-1]
+    assert final.complete and not final.waiting and "regions of the map" in final.message
+    assert final.curves[:len(early.curves)] == early.curves
+    assert len(final.curves) > len(early.curves)
+    lost = map_seeds.MapCells(("another map",))
+    lost.give_up()
+    gone = list(boundaries.compute(boundaries.BoundaryRequest(run, run.map_x, run.map_y,
+                                                              lost)))[-1]
+    assert not gone.complete and not gone.waiting and "did not finish" in gone.message

@@ -72,7 +72,8 @@ def pictures(make_explorer):
                 basins=np.array(views[BASINS].image),
                 map_status=e.research.status[MAP].object,
                 basins_status=e.research.status[BASINS].object,
-                curves=[(b.kind, b.values) for b in curves.curves], complete=curves.complete)
+                curves=[(b.kind, b.values) for b in curves.curves], complete=curves.complete,
+                curves_status=e.research.overlay.status)
 
 
 def test_research_views_on_a_cluster_equal_the_local_ones(make_explorer, scheduler,
@@ -90,6 +91,9 @@ def test_research_views_on_a_cluster_equal_the_local_ones(make_explorer, schedul
     where = f"on the Dask cluster at {lc.scheduler_address}"
     assert where in there["map_status"] and where in there["basins_status"]
     assert "Dask" not in here["map_status"] and "complete:" in here["map_status"]
+    # the boundary curves' status says where they were computed, as the map's does
+    assert there["curves_status"].endswith(f" — {where}"), there["curves_status"]
+    assert "Dask" not in here["curves_status"] and "curves from" in here["curves_status"]
     # identical pictures: every cell's class, every start's attractor, every curve
     assert here["map"].shape == (12, 12) and len(np.unique(here["map"])) >= 2
     assert not np.isnan(there["map"]).any()
@@ -141,3 +145,61 @@ def test_without_the_dask_extra_the_message_names_it(monkeypatch):
     monkeypatch.setattr(builtins, "__import__", no_dask)
     client, error = cluster._connect("tcp://127.0.0.1:8786")
     assert client is None and "dask extra is not installed" in error
+
+
+def test_a_scheduler_dying_mid_picture_says_so_and_the_next_picture_computes_here(
+        make_explorer, few_seeds, monkeypatch, caplog):
+    """The LocalCluster is closed while a regime map (with its boundary curves) is
+    computed on it: that picture says in its view that the cluster stopped answering,
+    the server log has no traceback (one WARNING line per failed picture, none from the
+    app above WARNING), and another session's next picture is computed on this server
+    with the note that the scheduler was not reached (the map complete, its cells those
+    of a run on the server's threads)."""
+    lc = distributed.LocalCluster(n_workers=1, threads_per_worker=2, processes=False,
+                                  **NO_DASHBOARD)
+    address = lc.scheduler_address
+    monkeypatch.setenv(cluster.ENV, address)
+    monkeypatch.setattr(cluster, "CONNECT_TIMEOUT", 0.5)
+    caplog.set_level(logging.INFO)
+    try:
+        e = make_explorer(map_n="40", boundaries="1")
+        shown = e.research.rows
+
+        def close_after_first_rows(kind, block):       # the cluster dies mid-picture
+            shown(kind, block)
+            if lc.status.name != "closed":
+                lc.close()
+        monkeypatch.setattr(e.research, "rows", close_after_first_rows)
+        e.research.compute(MAP)
+        assert e.research.job.done.wait(120) and e.research.boundary_job.done.wait(120)
+        status = e.research.status[MAP].object
+        assert status.startswith("not computed — the Dask cluster stopped answering "
+                                 "during the picture"), status
+        assert address in status
+        assert 0 < e.research.views[MAP].rows_done < 40      # the rows that came stay
+        curves = e.research.overlay.status
+        assert ("the Dask cluster stopped answering" in curves
+                or "curves from" in curves), curves            # failed (said so) or done
+        # another session: its picture on this server, the cluster's absence noted
+        other = make_explorer(map_n="8")
+        other.research.compute(MAP)
+        assert other.research.job.done.wait(120)
+        status = other.research.status[MAP].object
+        assert status.startswith("complete: 8 rows"), status
+        assert f"on this server ({cluster.ENV}={address!r}: no Dask scheduler reached" in status
+        monkeypatch.delenv(cluster.ENV)
+        here = make_explorer(map_n="8")
+        here.research.compute(MAP)
+        assert here.research.job.done.wait(120)
+        np.testing.assert_array_equal(other.research.views[MAP].impacts,
+                                      here.research.views[MAP].impacts)
+    finally:
+        lc.close()
+        for c in list(cluster._SHARED.values()):
+            c.close()
+        cluster._SHARED.clear()
+    assert not [r for r in caplog.records if r.exc_info or "Traceback" in r.getMessage()]
+    app_loud = [r for r in caplog.records
+                if r.name.startswith("app") and r.levelno >= logging.WARNING]
+    assert all(r.levelno == logging.WARNING for r in app_loud)
+    assert any("map failed" in r.getMessage() for r in app_loud)

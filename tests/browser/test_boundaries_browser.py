@@ -23,9 +23,11 @@ def test_boundary_renderers_fill_over_the_regime_map(page, server):
     wait_complete(page, "ie-map-status", timeout=120.0)
     page.wait_for_function(HOLDS, arg=["boundary_pd", "boundary_sn", "boundary_grazing"],
                            timeout=120_000)
-    # the picture once the overlay is done (complete or cut by its time bound)
-    deadline = time.monotonic() + 120
-    while "curves from" not in (status := text(page, "ie-boundaries-status")):
+    # the picture once the overlay is done with the map's regions too (complete, or cut
+    # by its time bound)
+    deadline = time.monotonic() + 180
+    while not ("regions of the map" in (status := text(page, "ie-boundaries-status"))
+               or "stopped at the time bound" in status):
         assert time.monotonic() < deadline, status
         page.wait_for_timeout(200)
     page.wait_for_timeout(500)
