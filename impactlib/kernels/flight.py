@@ -33,7 +33,8 @@ M, C_, K, G, R, OM, ALPHA, Q_, SQ, W0SQ, LAM1, LAM2, PP, QQ, RES, FA, NSP = rang
 # seg layout
 T0, CPH, SPH, FC, FS, H0, HV0, X0, V0, NSEG = range(10)
 
-RESONANCE_RTOL = 16 * 2.220446049250313e-16
+EPS = 2.220446049250313e-16
+RESONANCE_RTOL = 16 * EPS
 
 
 @jit
@@ -205,13 +206,18 @@ def flight_state(sp, seg, s):
 
 
 @jit
-def derivative_bounds(sp, rh, s_max):
+def derivative_bounds(sp, rh, s_max, x, v, span):
     """Bounds on |x'''| and |x''''| valid from now until s_max into the segment.
 
-    The homogeneous energy h'^2 + w0^2 h^2 never grows, so |h'| <= rh and w0 |h| <= rh;
-    the higher derivatives follow from h'' = -2 alpha h' - w0^2 h.  The forcing part has
-    amplitude FA and gains a factor omega per derivative (plus the secular term at
-    resonance, bounded with s <= s_max).
+    The smaller of two bounds, each valid on its own:
+
+    * split: the homogeneous energy h'^2 + w0^2 h^2 never grows, so |h'| <= rh and
+      w0 |h| <= rh; the higher derivatives follow from h'' = -2 alpha h' - w0^2 h.  The
+      forcing part has amplitude FA and gains a factor omega per derivative (plus the
+      secular term at resonance, bounded with s <= s_max).  Tight far from resonance.
+    * energy (:func:`motion_bounds`), from the state (x, v) now over the ``span`` time
+      units left until s_max.  It does not see the split, so near resonance, where FA ~
+      1/(c omega) and rh are huge and cancel in x, it stays the size of the motion.
     """
     alpha = sp[ALPHA]
     w0sq = sp[W0SQ]
@@ -227,7 +233,32 @@ def derivative_bounds(sp, rh, s_max):
     else:
         f3 = fa * om ** 3
         f4 = fa * om ** 4
-    return b3 + f3, b4 + f4
+    e3, e4 = motion_bounds(sp, x, v, span, 4)
+    return min(b3 + f3, e3), min(b4 + f4, e4)
+
+
+@jit
+def motion_bounds(sp, x, v, span, order):
+    """Bounds on |x^(order - 1)| and |x^(order)| (order >= 2) over the next ``span`` time
+    units of flight from the state (x, v), from the mechanical energy
+    E = m v^2 / 2 + k x^2 / 2.
+
+    Along Eq. (1), dE/dt = v (m x'' + k x) = v cos(omega t) - 2 c v^2 <= |v|
+    <= sqrt(2 E / m), so d sqrt(E)/dt <= 1 / sqrt(2 m) and over the span
+    sqrt(E) <= e = sqrt(E(0)) + span / sqrt(2 m).  Then |x'| <= e sqrt(2 / m) and
+    k |x| <= e sqrt(2 k); Eq. (1) and its derivatives, m x^(j+2) = (d/dt)^j cos(omega t)
+    - 2 c x^(j+1) - k x^(j), give the rest.  No particular or homogeneous part enters.
+    """
+    m, c, k, om = sp[M], sp[C_], sp[K], sp[OM]
+    e0 = math.sqrt(0.5 * m * v * v + 0.5 * k * x * x)
+    e = e0 * (1.0 + 8.0 * EPS) + span / math.sqrt(2.0 * m)
+    b_prev = e * math.sqrt(2.0 / m)
+    b = (1.0 + 2.0 * c * b_prev + e * math.sqrt(2.0 * k)) / m
+    fj = 1.0
+    for j in range(1, order - 1):
+        fj *= om
+        b_prev, b = b, (fj + 2.0 * c * b + k * b_prev) / m
+    return b_prev, b
 
 
 @jit
