@@ -155,7 +155,8 @@ def test_near_critical_is_continuous_in_c():
 @pytest.mark.parametrize("r, g", [(0.5, 0.35), (0.8, 0.35), (0.8, 0.0)])
 def test_lightly_damped_exact_resonance_matches_solve_ivp(c, r, g):
     """omega = omega_n with c tiny but not 0, four forcing periods from the wall, against
-    DOP853 with event location (rtol 1e-12; <= 2e-10 on these runs, test_reference).
+    DOP853 with event location (rtol 1e-12: within 2e-10 of the mpmath reference over
+    runs of this length, test_reference).
 
     Tolerance: the closed form sums a particular and a homogeneous part of size
     FA = 1/(2 c omega) each, which cancel in x, so x carries rounding of a few eps FA
