@@ -11,7 +11,7 @@ import math
 import numpy as np
 
 from ..kernels.flight import G, R, flight_state, start_segment, system_constants
-from ..kernels.grazing import ENDS_MARGIN, lowest_in_flight
+from ..kernels.grazing import CLEARANCE_SAMPLES, ENDS_MARGIN, lowest_in_flight
 from ..kernels.tangent import flow_jacobian, saltation
 from ..model import FIELDS, MAGNITUDE_MAX, MAGNITUDE_MIN, PARAM_NAMES, Params
 from .continuation import (segments_clearance, segments_monodromy, segments_residual,
@@ -19,7 +19,6 @@ from .continuation import (segments_clearance, segments_monodromy, segments_resi
 
 NEWTON_TOL = 1e-11
 NEWTON_MAX = 8
-CLEARANCE_SAMPLES = 48
 
 
 def in_range(name, value) -> bool:

@@ -52,6 +52,7 @@ import numpy as np
 
 from ..kernels._jit import jit
 from ..kernels.flight import G, K, M, OM, R, C_, flight_state, start_segment, system_constants
+from ..kernels.grazing import CLEARANCE_SAMPLES, lowest_in_flight
 from ..model import Params
 from .orbits import check_start, periodic_orbit
 from ..kernels.tangent import flow_jacobian
@@ -60,7 +61,6 @@ from ..io.result import SweepResult
 NEWTON_TOL = 1e-11
 NEWTON_MAX = 8
 EVENT_KINDS = ("period-doubling", "saddle-node", "neimark-sacker", "grazing")
-CLEARANCE_SAMPLES = 48
 MU_STEP = 0.2          # largest change of a multiplier per step while one is below MU_WATCH
 MU_WATCH = 3.0
 
@@ -130,7 +130,8 @@ def segments_monodromy(sp, ts, us, total):
 
 @jit
 def segments_clearance(sp, ts, us, total, nsamp):
-    """Lowest interior minimum of x - g over the flights (inf when no flight dips)."""
+    """Lowest interior minimum of x - g over the flights (inf when no flight dips), each
+    flight's from :func:`impactlib.kernels.grazing.lowest_in_flight`."""
     m = ts.shape[0]
     g = sp[G]
     r = sp[R]
@@ -138,35 +139,7 @@ def segments_clearance(sp, ts, us, total, nsamp):
     for j in range(m):
         t1 = ts[j + 1] if j + 1 < m else ts[0] + total
         seg = start_segment(sp, ts[j], g, -r * us[j])
-        s_end = t1 - ts[j]
-        h = s_end / nsamp
-        xp, vp, ap, jp, rh, xs = flight_state(sp, seg, 0.0)
-        vp = -r * us[j]
-        for i in range(1, nsamp + 1):
-            s = i * h
-            x, v, a, jk, rh, xs = flight_state(sp, seg, s)
-            if vp < 0.0 and v >= 0.0 and i < nsamp:
-                # a local minimum inside (s - h, s]: Newton on v = 0
-                lo = s - h
-                hi = s
-                sm = lo - vp * h / (v - vp)
-                for _ in range(30):
-                    xm, vm, am, jm, rh2, xs2 = flight_state(sp, seg, sm)
-                    if vm < 0.0:
-                        lo = sm
-                    else:
-                        hi = sm
-                    step = -vm / am if am > 0.0 else 0.5 * (lo + hi) - sm
-                    sn = sm + step
-                    if not (lo < sn < hi):
-                        sn = 0.5 * (lo + hi)
-                    if abs(sn - sm) <= 1e-15 * (1.0 + s_end):
-                        sm = sn
-                        break
-                    sm = sn
-                xm, vm, am, jm, rh2, xs2 = flight_state(sp, seg, sm)
-                best = min(best, xm - g)
-            vp = v
+        best = min(best, lowest_in_flight(sp, seg, t1 - ts[j], math.nan, nsamp)[0])
     return best
 
 

@@ -22,7 +22,8 @@ import numpy as np
 
 from ._jit import jit
 from .flight import (ALPHA, C_, CPH, FA, G, H0, HV0, K, M, NSEG, OM, PP, QQ, R, RES, SPH, T0, V0,
-                     W0SQ, X0, derivative_bounds, flight_state, release_time, wall_force)
+                     W0SQ, X0, derivative_bounds, flight_state, motion_bounds, release_time,
+                     wall_force)
 
 EPS = 2.220446049250313e-16
 #: Longest certified step, in forcing periods.  At exact resonance the bound on the
@@ -188,7 +189,7 @@ def next_impact(sp, seg, s_end, hmax, max_steps):
     if x - g <= 0.0 and v == 0.0:
         # at rest on the wall with a non-negative push: leave as tau^2 (a > 0) or tau^3 (a = 0)
         # the caller has decided the mass leaves (force >= 0); a < 0 here is rounding
-        m3, m4 = derivative_bounds(sp, rh, min(hmax, s_end))
+        m3, m4 = derivative_bounds(sp, rh, min(hmax, s_end), x, v, min(hmax, s_end))
         tau = safe_step(0.0, 0.0, max(a, 0.0), m3, min(hmax, s_end))
         if j > 0.0:
             tau = max(tau, min(2.0 * j / m4, hmax, s_end))
@@ -232,7 +233,7 @@ def search_from(sp, seg, s, x, v, a, rh, xs, s_end, hmax, max_steps, nsteps):
                     break
             return IMPACT, s, min(v, 0.0), nsteps
         h = min(hmax, s_end - s)
-        m3, m4 = derivative_bounds(sp, rh, s + h)
+        m3, m4 = derivative_bounds(sp, rh, s + h, x, v, h)
         if v < 0.0:
             # v stays negative while its upper bound v + a tau + m3 tau^2 / 2 does, so f
             # decreases strictly there; if f's upper bound is <= 0 by then, the first
@@ -271,7 +272,7 @@ def short_hop(sp, seg, s_end):
     The derivatives of x at the start follow from Eq. (1) itself (x'' = (cos(omega t) -
     2 c x' - k x) / m, differentiated), no closed-form evaluation; the remainder after
     degree N = SHORT_HOP_ORDER is at most R tau^(N+1), R = M / (N+1)!, M bounding
-    |x^(N+1)| (homogeneous energy bound plus FA omega^(N+1), as flight.derivative_bounds).
+    |x^(N+1)| (the smaller of the two bounds of flight.derivative_bounds, to order N+1).
     f = x - g lies between p - R tau^(N+1) and p + R tau^(N+1), p the polynomial; the
     lower one is shown positive before its first root tau_lo (Bernstein coefficients of
     (p - R tau^(N+1)) / tau on [0, tau_lo]), so no earlier root; the upper one's root
@@ -298,7 +299,9 @@ def short_hop(sp, seg, s_end):
     if tau * max(om, 2.0 * alpha + math.sqrt(w0sq)) > 0.5:
         # the remainder's terms (lambda tau)^(n+1) / (n+1)! exceed rounding by far
         return False, 0.0, 0.0
-    # remainder bound: homogeneous derivatives b_j, forcing FA omega^j
+    # remainder bound: homogeneous derivatives b_j plus forcing FA omega^j, or the
+    # energy bound over the hop (span: the parabola's root with a margin; a root found
+    # beyond it is refused below)
     rh = math.sqrt(seg[HV0] * seg[HV0] + w0sq * seg[H0] * seg[H0])
     b_prev = rh
     b = rh * (2.0 * alpha + math.sqrt(w0sq))
@@ -306,7 +309,8 @@ def short_hop(sp, seg, s_end):
     for j in range(3, n + 2):
         b_prev, b = b, 2.0 * alpha * b + w0sq * b_prev
         fact *= j
-    rem = (b + sp[FA] * om ** (n + 1)) / fact
+    span = 2.0 * tau
+    rem = min(b + sp[FA] * om ** (n + 1), motion_bounds(sp, x0, u, span, n + 1)[1]) / fact
     # can the remainder fix the parabola's root to rounding (it moves the root by about
     # rem tau^(n+1) / u)?
     if not (tau < s_end and rem * tau ** (n + 1) <= 4.0 * EPS * u * (abs(seg[T0]) + tau)):
@@ -352,7 +356,7 @@ def short_hop(sp, seg, s_end):
             tau_lo = tau * (1.0 - 4.0 * EPS)
         else:
             tau_hi = tau * (1.0 + 4.0 * EPS)
-    if tau_hi - tau_lo > 2.0 * EPS * (abs(seg[T0]) + tau_lo):
+    if tau_hi - tau_lo > 2.0 * EPS * (abs(seg[T0]) + tau_lo) or tau_hi > span:
         return False, 0.0, 0.0
     # no earlier root: Bernstein coefficients of q_lo on [0, tau_lo] all positive
     # (coefficients c_i = a_(i+1) tau_lo^i, c_n = -rem tau_lo^n; degree n polynomial)
@@ -522,7 +526,7 @@ def next_impact_grid(sp, seg, s_end, hmax, max_steps, grid, s_guess):
     hh, hd = seg[H0], seg[HV0]
     cph, sph = seg[CPH], seg[SPH]
     rh0 = math.sqrt(hd * hd + w0sq * hh * hh)
-    m3, m4 = derivative_bounds(sp, rh0, s_end)
+    m3, m4 = derivative_bounds(sp, rh0, s_end, x0, v0, s_end)
     herm = m4 * (h * h) * (h * h) / 384.0
     # size of the terms summed at a node (|h| <= rh0 / w0, |x_p| <= FA), for rounding
     size = rh0 / math.sqrt(w0sq) + rh0 + sp[FA] * (1.0 + om) + abs(g) + abs(x0)

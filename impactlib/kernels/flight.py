@@ -29,11 +29,13 @@ import numpy as np
 from ._jit import jit
 
 # sp layout
-M, C_, K, G, R, OM, ALPHA, Q_, SQ, W0SQ, LAM1, LAM2, PP, QQ, RES, FA, NSP = range(17)
+(M, C_, K, G, R, OM, ALPHA, Q_, SQ, W0SQ, LAM1, LAM2, PP, QQ, RES, FA, EV, EKX, EGROW, INV_M,
+ HRATE, NSP) = range(22)
 # seg layout
 T0, CPH, SPH, FC, FS, H0, HV0, X0, V0, NSEG = range(10)
 
-RESONANCE_RTOL = 16 * 2.220446049250313e-16
+EPS = 2.220446049250313e-16
+RESONANCE_RTOL = 16 * EPS
 
 
 @jit
@@ -51,6 +53,11 @@ def fill_constants(sp, m, c, k, g, r, omega):
     else:
         sp[LAM1] = 0.0
         sp[LAM2] = 0.0
+    # derivative_bounds' factors: |h''| <= HRATE rh; |v| <= EV sqrt(E), k |x| <= EKX sqrt(E)
+    # and sqrt(E) grows by at most EGROW per unit time (motion_bounds)
+    sp[HRATE] = 2.0 * alpha + math.sqrt(w0sq)
+    sp[EV], sp[EKX] = math.sqrt(2.0 / m), math.sqrt(2.0 * k)
+    sp[EGROW], sp[INV_M] = 1.0 / math.sqrt(2.0 * m), 1.0 / m
     detune = k - m * omega * omega
     res = c == 0.0 and abs(detune) <= RESONANCE_RTOL * max(k, m * omega * omega)
     if res:
@@ -205,29 +212,58 @@ def flight_state(sp, seg, s):
 
 
 @jit
-def derivative_bounds(sp, rh, s_max):
+def derivative_bounds(sp, rh, s_max, x, v, span):
     """Bounds on |x'''| and |x''''| valid from now until s_max into the segment.
 
-    The homogeneous energy h'^2 + w0^2 h^2 never grows, so |h'| <= rh and w0 |h| <= rh;
-    the higher derivatives follow from h'' = -2 alpha h' - w0^2 h.  The forcing part has
-    amplitude FA and gains a factor omega per derivative (plus the secular term at
-    resonance, bounded with s <= s_max).
+    The smaller of two bounds, each valid on its own:
+
+    * split: the homogeneous energy h'^2 + w0^2 h^2 never grows, so |h'| <= rh and
+      w0 |h| <= rh; the higher derivatives follow from h'' = -2 alpha h' - w0^2 h.  The
+      forcing part has amplitude FA and gains a factor omega per derivative (plus the
+      secular term at resonance, bounded with s <= s_max).  Tight far from resonance.
+    * energy (:func:`motion_bounds`), from the state (x, v) now over the ``span`` time
+      units left until s_max.  It does not see the split, so near resonance, where FA ~
+      1/(c omega) and rh are huge and cancel in x, it stays the size of the motion.
     """
     alpha = sp[ALPHA]
     w0sq = sp[W0SQ]
-    b1 = rh
-    b2 = rh * (2.0 * alpha + math.sqrt(w0sq))
-    b3 = 2.0 * alpha * b2 + w0sq * b1
+    b2 = rh * sp[HRATE]
+    b3 = 2.0 * alpha * b2 + w0sq * rh
     b4 = 2.0 * alpha * b3 + w0sq * b2
     om = sp[OM]
     fa = sp[FA]
+    om3 = om * om * om
     if sp[RES] != 0.0:
-        f3 = fa * (3.0 * om * om + s_max * om ** 3)
-        f4 = fa * (4.0 * om ** 3 + s_max * om ** 4)
+        f3 = fa * (3.0 * om * om + s_max * om3)
+        f4 = fa * (4.0 * om3 + s_max * om3 * om)
     else:
-        f3 = fa * om ** 3
-        f4 = fa * om ** 4
-    return b3 + f3, b4 + f4
+        f3 = fa * om3
+        f4 = f3 * om
+    e3, e4 = motion_bounds(sp, x, v, span, 4)
+    return min(b3 + f3, e3), min(b4 + f4, e4)
+
+
+@jit
+def motion_bounds(sp, x, v, span, order):
+    """Bounds on |x^(order - 1)| and |x^(order)| (order >= 2) over the next ``span`` time
+    units of flight from the state (x, v), from the mechanical energy
+    E = m v^2 / 2 + k x^2 / 2.
+
+    Along Eq. (1), dE/dt = v (m x'' + k x) = v cos(omega t) - 2 c v^2 <= |v|
+    <= sqrt(2 E / m), so d sqrt(E)/dt <= 1 / sqrt(2 m) and over the span
+    sqrt(E) <= e = sqrt(E(0)) + span / sqrt(2 m).  Then |x'| <= e sqrt(2 / m) and
+    k |x| <= e sqrt(2 k); Eq. (1) and its derivatives, m x^(j+2) = (d/dt)^j cos(omega t)
+    - 2 c x^(j+1) - k x^(j), give the rest.  No particular or homogeneous part enters.
+    """
+    c2, k, om, im = 2.0 * sp[C_], sp[K], sp[OM], sp[INV_M]
+    e = math.sqrt(0.5 * (sp[M] * v * v + k * x * x)) * (1.0 + 8.0 * EPS) + span * sp[EGROW]
+    b_prev = e * sp[EV]
+    b = (1.0 + c2 * b_prev + e * sp[EKX]) * im
+    fj = 1.0
+    for j in range(1, order - 1):
+        fj *= om
+        b_prev, b = b, (fj + c2 * b + k * b_prev) * im
+    return b_prev, b
 
 
 @jit

@@ -10,6 +10,8 @@ from .flight import G, flight_state
 #: Minima this close (relative to the flight's length) to an impact or to the touch are
 #: the touch itself, not another minimum.
 ENDS_MARGIN = 1e-6
+#: Samples per flight at which the sign of v is checked for a minimum.
+CLEARANCE_SAMPLES = 48
 
 
 @jit

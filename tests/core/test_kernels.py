@@ -63,6 +63,47 @@ def test_flight_state_matches_mpmath_in_every_regime(name):
             assert abs(a - acc) <= 64 * EPS * rate * rate * (xs + arg * scale)
 
 
+def _derivatives(p, t, x, v, n):
+    """x, x', ..., x^(n) at time t from the state (x, v) by Eq. (1) differentiated:
+    m x^(j+2) = (d/dt)^j cos(omega t) - 2 c x^(j+1) - k x^(j)."""
+    d = [x, v]
+    w = p.omega
+    for j in range(n - 1):
+        trig = (math.cos, lambda z: -math.sin(z), lambda z: -math.cos(z), math.sin)[j % 4]
+        d.append((w ** j * trig(w * t) - 2 * p.c * d[j + 1] - p.k * d[j]) / p.m)
+    return d
+
+
+@pytest.mark.parametrize("name", [*REGIMES, "resonance, c=1e-10"])
+def test_energy_bounds_hold_along_flights(name):
+    """flight.motion_bounds against the derivatives along the closed form (x, v from
+    flight_state, tested above; higher derivatives from Eq. (1) at each sample), for
+    orders 3, 4 and 9 (the impact search's and the short hop's) over spans of 0.01 to 5
+    time units from random states.  Where the particular solution is large
+    (c = 1e-10 at omega = omega_n), derivative_bounds is the energy bound, not ~1/c."""
+    p = REGIMES.get(name) or PAPER.replace(c=1e-10, omega=1.0)
+    sp = constants(p)
+    rng = np.random.default_rng(7 + list(REGIMES).index(name) if name in REGIMES else 99)
+    for _ in range(8):
+        t0 = float(rng.uniform(0.0, 50.0))
+        x0 = float(rng.uniform(-1.0, 1.0))
+        v0 = float(rng.uniform(-2.0, 2.0))
+        span = float(10.0 ** rng.uniform(-2.0, math.log10(5.0)))
+        seg = F.start_segment(sp, t0, x0, v0)
+        peak = np.zeros(10)
+        for s in np.linspace(0.0, span, 400):
+            x, v = F.flight_state(sp, seg, s)[:2]
+            peak = np.maximum(peak, np.abs(_derivatives(p, t0 + s, x, v, 9)))
+        for order in (3, 4, 9):
+            lower, upper = F.motion_bounds(sp, x0, v0, span, order)
+            # rounding of the sampled values: a relative 1e-9 is far above it
+            assert peak[order - 1] <= lower * (1 + 1e-9) and peak[order] <= upper * (1 + 1e-9)
+        if name == "resonance, c=1e-10":
+            rh = F.flight_state(sp, seg, 0.0)[4]
+            m3, m4 = F.derivative_bounds(sp, rh, span, x0, v0, span)
+            assert m3 == F.motion_bounds(sp, x0, v0, span, 4)[0] < 1e3
+
+
 def _steady(p, t):
     """The steady forced orbit x_p = P cos(wt) + Q sin(wt) = A cos(wt - phi)."""
     det = p.k - p.m * p.omega ** 2
