@@ -85,6 +85,13 @@ PAGE_TEXT = """() => {
 }"""
 
 
+#: Compare mode's last diagram and last section hold data.
+COMPARE_FILLED = """() => { const d = Bokeh.documents[0];
+    return ['compare_fig3f', 'compare_fig7d'].every((n) => {
+      const f = d.get_model_by_name(n);
+      return f && f.renderers[0].data_source.data[Object.keys(f.renderers[0].data_source.data)[0]].length > 0; }); }"""
+
+
 def open_page(page, server, size, query=""):
     page.set_viewport_size({"width": size[0], "height": size[1]})
     page.goto(server.url + query)
@@ -160,17 +167,31 @@ def test_compare_fills_its_room(page, server, where):
     open_page(page, server, size)
     show_mode(page, "Compare")
     names = tuple(f"compare_fig3{c}" for c in "abcdef") + tuple(f"compare_fig7{c}" for c in "abcd")
-    page.wait_for_function("""() => { const d = Bokeh.documents[0];
-        return ['compare_fig3f', 'compare_fig7d'].every((n) => {
-          const f = d.get_model_by_name(n);
-          return f && f.renderers[0].data_source.data[Object.keys(f.renderers[0].data_source.data)[0]].length > 0; }); }""",
-                           timeout=90_000)
+    page.wait_for_function(COMPARE_FILLED, timeout=90_000)
     page.wait_for_timeout(800)
     frames = check_layout(page, size, names, scrolls=size[0] < 900)
     assert all(frames[n]["box"][1] > 0 for n in names)        # below the header
     for n in SCENE_VIEWS:                                      # explore gave up its room
         assert n not in frames, n
     page.screenshot(path=str(SHOTS / f"compare-{where}.png"))
+
+
+def test_compare_from_a_link_is_laid_out_as_when_switched_to(page, server):
+    """At 1280 x 720, ``?mode=compare`` (the page built with the mode open) gives the
+    small multiples the same frames as a click on Compare after load: no page scroll."""
+    size = SIZES["projector"]
+    names = tuple(f"compare_fig3{c}" for c in "abcdef") + tuple(f"compare_fig7{c}" for c in "abcd")
+    frames = {}
+    for how in ("link", "switch"):
+        open_page(page, server, size, "?mode=compare" if how == "link" else "")
+        if how == "switch":
+            show_mode(page, "Compare")
+        page.wait_for_function(COMPARE_FILLED, timeout=90_000)
+        page.wait_for_timeout(800)
+        frames[how] = check_layout(page, size, names, scrolls=False)
+    for n in names:
+        link, switch = frames["link"][n], frames["switch"][n]
+        assert abs(link["w"] - switch["w"]) <= 1 and abs(link["h"] - switch["h"]) <= 1, (n, link, switch)
 
 
 @pytest.mark.parametrize("where", list(SIZES))
