@@ -56,8 +56,9 @@ def make_figure(name: str, title: str, x_label: str, y_label: str, **kw):
 #: text that stays true is drawn instead: first without the settings list (the text
 #: between the first ": " and " — ", which the bar and the drawer show), then without
 #: its " · " counts from the last, then without the explanation of a closing note
-#: ("(settings changed: compute again)" -> "(settings changed)"), each fitted
-#: the same way (the last one down to 11 px).
+#: ("(settings changed: compute again)" -> "(settings changed)"), then without the
+#: head's detail after its first ", " ("Basins at phase 0, 100×100 starts — …" ->
+#: "Basins at phase 0 — …"), each fitted the same way (the last one down to 11 px).
 #: Only the drawing changes (a silent set, then the text property's own change signal for
 #: the title's view: nothing goes back to the server); the text and
 #: size the server sets stay the base, so a wider frame gets them back. Checked twice a
@@ -79,7 +80,9 @@ if (!window.__ieFitTitles) {
       out.push(t)
     }
     const note = t.lastIndexOf(" ("), why = t.indexOf(": ", note)
-    if (note > 0 && why > note && t.endsWith(")")) out.push(t.slice(0, why) + ")")
+    if (note > 0 && why > note && t.endsWith(")")) { t = t.slice(0, why) + ")"; out.push(t) }
+    const comma = t.indexOf(", "), head = t.indexOf(" — ")
+    if (comma > 0 && head > comma) out.push(t.slice(0, comma) + t.slice(head))
     return out
   }
   const fit = () => {

@@ -31,7 +31,7 @@ MINIMUM = {
 #: Bokeh models the page may hold (BokehJS's count, ``all_models``): the first page
 #: (explore) and after opening each other mode. The classroom page's target for the first
 #: page is 140; what is left above it is seven figures' own models (about 20 each).
-MODEL_BUDGET = {"explore": 186, "compare": 325, "research": 252}
+MODEL_BUDGET = {"explore": 182, "compare": 287, "research": 248}
 #: Fonts a stock Debian Chromium has for any text (fonts-dejavu-core); the page ships none.
 DEJAVU = "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf"
 
@@ -85,6 +85,18 @@ PAGE_TEXT = """() => {
 }"""
 
 
+#: The Lyapunov strip's y axis: [smallest gap between two tick labels (px), label font
+#: size (px), number of ticks].
+STRIP_TICKS = """() => {
+  const v = Bokeh.index.query((v) => v.model.constructor.__name__ === "Figure")
+    .find((v) => v.model.name === "lyapunov_figure");
+  const ax = v.axis_views.find((a) => a.dimension === 1);
+  const ys = [...ax.tick_coords.major[1]].sort((a, b) => a - b);
+  const r = v.model.y_range, h = v.frame.bbox.height;
+  const gaps = ys.slice(1).map((y, i) => (y - ys[i]) * h / Math.abs(r.end - r.start));
+  const f = ax.model.major_label_text_font_size;
+  return [Math.min(...gaps), parseFloat(typeof f === "string" ? f : f.value), ys.length];
+}"""
 #: Compare mode's last diagram and last section hold data.
 COMPARE_FILLED = """() => { const d = Bokeh.documents[0];
     return ['compare_fig3f', 'compare_fig7d'].every((n) => {
@@ -130,6 +142,13 @@ def check_layout(page, size, names, scrolls: bool) -> dict:
     return frames
 
 
+def assert_strip_ticks_apart(page):
+    """The strip's tick labels do not overlap: at least a label's height (its font size)
+    apart."""
+    gap, font, n = page.evaluate(STRIP_TICKS)
+    assert n >= 2 and gap >= font, (gap, font, n)
+
+
 def assert_minimum(frames, size):
     for name, (w, h) in MINIMUM.get(size, {}).items():
         f = frames[name]
@@ -146,6 +165,7 @@ def test_explore_sizes_and_presenter(page, server, where):
     fits = size[0] >= 900
     normal = check_layout(page, size, EXPLORE, scrolls=not fits)
     assert_minimum(normal, size)
+    assert_strip_ticks_apart(page)
     SHOTS.mkdir(parents=True, exist_ok=True)
     page.screenshot(path=str(SHOTS / f"explore-{where}.png"))
     page.locator(".ie-w-presenter button").click()
@@ -153,6 +173,7 @@ def test_explore_sizes_and_presenter(page, server, where):
                            timeout=20_000)
     page.wait_for_timeout(1200)
     big = check_layout(page, size, EXPLORE, scrolls=not fits)
+    assert_strip_ticks_apart(page)
     if not fits:                    # a tablet or phone: one scrolling column, titles fit
         return
     for n in EXPLORE:
@@ -219,6 +240,17 @@ def test_research_owns_the_plot_area(page, server, where):
     if size == (1280, 720):
         f = frames["basins_figure"]
         assert f["w"] >= 700 and f["h"] >= 420, f
+    # a setting changed since the pictures were made: the note in their titles fits too
+    box = page.locator(".ie-w-c input").first
+    box.fill("0.1")
+    box.press("Enter")
+    for name, tab in (("basins_figure", None), ("regime_map_figure", "Regime map")):
+        if tab:
+            page.locator(".bk-tab", has_text=tab).first.click()
+        page.wait_for_function(f"() => ie.title('{name}').includes('settings changed')",
+                               timeout=20_000)
+        page.wait_for_timeout(1200)         # titles fitted
+        check_layout(page, size, (name,), scrolls=size[0] < 900)
 
 
 def test_tablet_has_omega_and_two_scene_views_on_screen(page, server):
