@@ -19,6 +19,7 @@ from __future__ import annotations
 import html
 import math
 import re
+from collections.abc import Mapping
 
 import panel as pn
 from bokeh.layouts import column as bokeh_column
@@ -30,7 +31,7 @@ from .page_style import (BAR_CSS, BAR_ITEM_CSS, CAPTION_CSS, COMPARE_CSS, CSS, D
                          NOTE_CSS, PAGE_CSS, PNG_JS, ROOM_CSS, STAGE_CSS, TOP_CSS)
 from .panel_fixes import GRID_COLUMN_CSS, PromptFloatSlider
 from .scenes import SCENES
-from .settings import MODES, ON_DIAGRAM, RESEARCH, SETTINGS
+from .settings import BY_NAME, MODES, ON_DIAGRAM, RESEARCH, SETTINGS
 
 DRAWER_WIDTH = 320
 #: The diagram status chip's background at ``pct`` per cent done.
@@ -166,6 +167,38 @@ def _card(title: str, objects: list, open_: bool = False):
     return card
 
 
+class _Made:
+    """Each setting's (widget, page item), built the first time either is asked for: the
+    drawer's and research's settings cost nothing on a page that never shows them."""
+
+    def __init__(self, settings):
+        self._settings, self._made = settings, {}
+        self.widget, self.item = _Lazy(self, 0), _Lazy(self, 1)
+
+    def get(self, name: str):
+        if name not in self._made:
+            self._made[name] = make_widget(self._settings, BY_NAME[name])
+        return self._made[name]
+
+
+class _Lazy(Mapping):
+    """Setting name -> one half of ``_Made.get`` (a read-only mapping over every setting)."""
+
+    def __init__(self, made: _Made, half: int):
+        self._made, self._half = made, half
+
+    def __getitem__(self, name: str):
+        if name not in BY_NAME:
+            raise KeyError(name)
+        return self._made.get(name)[self._half]
+
+    def __iter__(self):
+        return iter(BY_NAME)
+
+    def __len__(self) -> int:
+        return len(BY_NAME)
+
+
 class Controls:
     """Widgets, panes and layout of one session's page. ``rooms`` maps the modes other
     than explore to a function that builds that mode's plot area (called when the mode
@@ -173,9 +206,8 @@ class Controls:
 
     def __init__(self, settings, views, *, on_scene, on_accuracy, downloads, on_reset,
                  rooms=None):
-        made = {s.name: make_widget(settings, s) for s in SETTINGS}
-        self.widgets = {name: widget for name, (widget, _) in made.items()}
-        self._items = {name: item for name, (_, item) in made.items()}
+        made = _Made(settings)
+        self.widgets, self._items = made.widget, made.item
         self._downloads = downloads
         self._room_builders = dict(rooms or {})
         self.rooms: dict = {}
@@ -286,7 +318,8 @@ class Controls:
             margin=0)
         self.top = top = pn.Column(bar, self.header, css_classes=["ie-top"], stylesheets=[TOP_CSS],
                         sizing_mode="stretch_width", margin=0)
-        self.info = info = pn.Row(self.message_pane, self.caption, self.badge, self.stability,
+        # (the message pane joins the line with the first message: a model less per page)
+        self.info = info = pn.Row(self.caption, self.badge, self.stability,
                       self.diagram_status, css_classes=["ie-info"],
                       stylesheets=[INFO_CSS], sizing_mode="stretch_width", margin=0)
         cells = [v for v in views if v.figure is not None and not v.under]
@@ -372,6 +405,8 @@ class Controls:
         self.message = text
         self.message_pane.object = text
         self.message_pane.visible = True
+        if self.message_pane not in self.info.objects:
+            self.info.insert(0, self.message_pane)
 
     def clear_message(self) -> None:
         if self.message:

@@ -20,11 +20,14 @@ NARROW = 899
 WIDE = NARROW + 1
 #: The page fills the window (no page scroll) from 900 px wide: a fixed header and bar,
 #: one information line, and the active mode's plot area taking the rest.
-#: ``ie-png-layout``: the size the PNG export lays the page out at (``PNG_JS``).
+#: ``ie-png-layout``: the size the PNG export lays the page out at (``PNG_JS``). No
+#: minimum height: BokehJS gives the page the sum of its children's minimum heights as
+#: laid out at load (the ten compare figures, opened from a link, ask for ~1100 px).
 PAGE_CSS = f"""
-:host {{ width: 100vw; height: 100vh !important; overflow: hidden; min-width: 0 !important; }}
+:host {{ width: 100vw; height: 100vh !important; overflow: hidden; min-width: 0 !important;
+         min-height: 0 !important; }}
 @media (max-width: {NARROW}px) {{
-  :host {{ height: auto !important; min-height: 100vh; overflow: visible; }}
+  :host {{ height: auto !important; min-height: 100vh !important; overflow: visible; }}
 }}
 :host(.ie-png-layout) {{ width: var(--ie-png-width) !important;
                         height: var(--ie-png-height) !important; }}

@@ -55,7 +55,10 @@ def make_figure(name: str, title: str, x_label: str, y_label: str, **kw):
 #: three quarters of its size (never below 11 px); where it still does not fit, a shorter
 #: text that stays true is drawn instead: first without the settings list (the text
 #: between the first ": " and " — ", which the bar and the drawer show), then without
-#: its " · " counts from the last, each fitted the same way (the last one down to 11 px).
+#: its " · " counts from the last, then without the explanation of a closing note
+#: ("(settings changed: compute again)" -> "(settings changed)"), then without the
+#: head's detail after its first ", " ("Basins at phase 0, 100×100 starts — …" ->
+#: "Basins at phase 0 — …"), each fitted the same way (the last one down to 11 px).
 #: Only the drawing changes (a silent set, then the text property's own change signal for
 #: the title's view: nothing goes back to the server); the text and
 #: size the server sets stay the base, so a wider frame gets them back. Checked twice a
@@ -76,6 +79,10 @@ if (!window.__ieFitTitles) {
       t = t.slice(0, dot) + (rest > dot ? t.slice(rest) : "")
       out.push(t)
     }
+    const note = t.lastIndexOf(" ("), why = t.indexOf(": ", note)
+    if (note > 0 && why > note && t.endsWith(")")) { t = t.slice(0, why) + ")"; out.push(t) }
+    const comma = t.indexOf(", "), head = t.indexOf(" — ")
+    if (comma > 0 && head > comma) out.push(t.slice(0, comma) + t.slice(head))
     return out
   }
   const fit = () => {
@@ -176,13 +183,14 @@ def share_helpers(figures) -> None:
     labels, the selection policy, the "all rows" filter), and every renderer a glyph for
     non-selected and muted rows that no view uses (no selection tools, no legend).
     Share one instance of each among the session's figures and drop the unused glyphs
-    (about 50 models of a page). The same goes for the sources' selection (no view
+    (about 50 models of a page), and one horizontal grid among the figures. The same goes for the sources' selection (no view
     selects: no tap or box-select tool) and for the pan, wheel zoom and reset tools
     (BokehJS makes a tool's view per plot; a shared tool only shares its on/off state).
     Models cannot be shared between documents, so this runs once per session."""
     ticker, formatter, labels = BasicTicker(), BasicTickFormatter(), AllLabels()
     policy, rows, scale, selection = UnionRenderers(), AllIndices(), LinearScale(), Selection()
     tools: dict = {}
+    grid_lines: dict = {}
     for fig in figures:
         fig.toolbar.tools = [_shared_tool(tools, t) for t in fig.toolbar.tools]
         # BokehJS clones a figure's scale models before setting their ranges
@@ -194,9 +202,11 @@ def share_helpers(figures) -> None:
             if type(axis.formatter) is BasicTickFormatter:
                 axis.formatter = formatter
             axis.major_label_policy = labels
-        for grid in fig.center:         # (fig.xgrid and fig.select walk the whole graph)
-            if type(getattr(grid, "ticker", None)) is BasicTicker:
-                grid.ticker = ticker
+        # the horizontal grid lines: one Grid placed by the shared ticker (a Grid that
+        # names no axis reads its ticks from its ticker and its range from each plot)
+        fig.center = [grid if not _plain_grid(grid) else
+                      grid_lines.setdefault("y", Grid(dimension=1, ticker=ticker))
+                      for grid in fig.center]   # (fig.ygrid and fig.select walk the graph)
         for r in (r for r in fig.renderers if isinstance(r, GlyphRenderer)):
             r.nonselection_glyph = None
             r.muted_glyph = None
@@ -204,6 +214,14 @@ def share_helpers(figures) -> None:
             # (``selected`` is read-only once built; set_from_json is how BokehJS sets it)
             r.data_source.set_from_json("selected", selection)
             r.view.filter = rows
+
+
+def _plain_grid(grid) -> bool:
+    """A horizontal grid as ``make_figure`` leaves it: on a y axis with the basic ticker,
+    styled as Bokeh's default."""
+    return (isinstance(grid, Grid) and grid.dimension == 1 and grid.axis is not None
+            and type(grid.axis.ticker) is BasicTicker
+            and set(grid.properties_with_values(include_defaults=False)) <= {"dimension", "axis", "ticker"})
 
 
 def _shared_tool(shared: dict, tool):

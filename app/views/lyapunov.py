@@ -13,8 +13,10 @@ in the title, never dropped.
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
-from bokeh.models import ColumnDataSource, Grid, Range1d, Span
+from bokeh.models import ColumnDataSource, FixedTicker, Grid, Range1d, Span
 
 from ..state import Run
 from ._figure import LINE, WALL, make_figure, padded, set_range
@@ -62,6 +64,24 @@ def strip_columns(values: np.ndarray, lam: np.ndarray, sweep: np.ndarray,
              "chaos": chaos}, (lo, hi))
 
 
+def strip_ticks(lo: float, hi: float) -> list[float]:
+    """The strip's y ticks for the range (lo, hi) around 0: 0 and, on each side, a round
+    value (1, 2 or 5 times a power of ten) within 90 % of that side, if it lies at least
+    a quarter of the range away from 0. A strip ~60 px high has room for three labels,
+    not the six a ticker places."""
+    ticks = [0.0]
+    for edge in (lo, hi):
+        size = 0.9 * abs(edge)
+        if size <= 0:
+            continue
+        unit = 10.0 ** math.floor(math.log10(size))
+        step = max(m for m in (1, 2, 5) if m * unit <= size * (1 + 1e-12))
+        tick = round(math.copysign(step * unit, edge), 12)
+        if abs(tick) >= 0.25 * (hi - lo):
+            ticks.append(tick)
+    return sorted(ticks)
+
+
 #: Height (px) of the strip under the diagram, on screen and in presenter mode.
 STRIP_HEIGHT = {False: 110, True: 120}
 
@@ -83,6 +103,7 @@ class LyapunovView(View):
         # few Bokeh models per page: no tools (the x axis is the diagram's, zoomed there)
         # and no grid lines (the zero line is the one that matters)
         self.figure.center = [m for m in self.figure.center if not isinstance(m, Grid)]
+        self.figure.yaxis.ticker = FixedTicker(ticks=strip_ticks(-MIN_SPAN, MIN_SPAN))
         self.figure.add_layout(Span(location=0.0, dimension="width", line_color=WALL,
                                     line_width=1, name="lyapunov_zero"))
         self.figure.scatter("omega", "y", source=self.source, size="size", marker="marker",
@@ -126,6 +147,7 @@ class LyapunovView(View):
                                        kind == "chaotic")
         self.source.data = data
         set_range(self.figure.y_range, lo, hi)
+        self.figure.yaxis.ticker.ticks = strip_ticks(lo, hi)
         self.figure.title.text = strip_title(lam, kind, classified, note)
 
 

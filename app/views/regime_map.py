@@ -121,7 +121,7 @@ class RegimeMapView(View):
 
     def mark_stale(self, stale: bool) -> None:
         """Note in the title that the settings changed since this picture was made."""
-        note = " (settings changed since: compute again)" if stale else ""
+        note = " (settings changed: compute again)" if stale else ""
         self.figure.title.text = f"{self._title()} — {self._end}{note}"
 
     def show_scene(self, scene) -> None:

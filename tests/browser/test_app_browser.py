@@ -292,7 +292,7 @@ def test_slider_to_repaint_latency(page, server):
 #: bar of ω, r, c, g, the header and the information line. The settings drawer, compare
 #: and research modes and the accuracy panel are built on use (tests/browser/test_modes.py
 #: counts each mode when opened).
-MODEL_BUDGET = 186
+MODEL_BUDGET = 182
 
 
 def test_page_bokeh_models_within_budget(page, server):

@@ -31,7 +31,7 @@ MINIMUM = {
 #: Bokeh models the page may hold (BokehJS's count, ``all_models``): the first page
 #: (explore) and after opening each other mode. The classroom page's target for the first
 #: page is 140; what is left above it is seven figures' own models (about 20 each).
-MODEL_BUDGET = {"explore": 186, "compare": 325, "research": 252}
+MODEL_BUDGET = {"explore": 182, "compare": 287, "research": 248}
 #: Fonts a stock Debian Chromium has for any text (fonts-dejavu-core); the page ships none.
 DEJAVU = "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf"
 
@@ -85,6 +85,25 @@ PAGE_TEXT = """() => {
 }"""
 
 
+#: The Lyapunov strip's y axis: [smallest gap between two tick labels (px), label font
+#: size (px), number of ticks].
+STRIP_TICKS = """() => {
+  const v = Bokeh.index.query((v) => v.model.constructor.__name__ === "Figure")
+    .find((v) => v.model.name === "lyapunov_figure");
+  const ax = v.axis_views.find((a) => a.dimension === 1);
+  const ys = [...ax.tick_coords.major[1]].sort((a, b) => a - b);
+  const r = v.model.y_range, h = v.frame.bbox.height;
+  const gaps = ys.slice(1).map((y, i) => (y - ys[i]) * h / Math.abs(r.end - r.start));
+  const f = ax.model.major_label_text_font_size;
+  return [Math.min(...gaps), parseFloat(typeof f === "string" ? f : f.value), ys.length];
+}"""
+#: Compare mode's last diagram and last section hold data.
+COMPARE_FILLED = """() => { const d = Bokeh.documents[0];
+    return ['compare_fig3f', 'compare_fig7d'].every((n) => {
+      const f = d.get_model_by_name(n);
+      return f && f.renderers[0].data_source.data[Object.keys(f.renderers[0].data_source.data)[0]].length > 0; }); }"""
+
+
 def open_page(page, server, size, query=""):
     page.set_viewport_size({"width": size[0], "height": size[1]})
     page.goto(server.url + query)
@@ -123,6 +142,13 @@ def check_layout(page, size, names, scrolls: bool) -> dict:
     return frames
 
 
+def assert_strip_ticks_apart(page):
+    """The strip's tick labels do not overlap: at least a label's height (its font size)
+    apart."""
+    gap, font, n = page.evaluate(STRIP_TICKS)
+    assert n >= 2 and gap >= font, (gap, font, n)
+
+
 def assert_minimum(frames, size):
     for name, (w, h) in MINIMUM.get(size, {}).items():
         f = frames[name]
@@ -139,6 +165,7 @@ def test_explore_sizes_and_presenter(page, server, where):
     fits = size[0] >= 900
     normal = check_layout(page, size, EXPLORE, scrolls=not fits)
     assert_minimum(normal, size)
+    assert_strip_ticks_apart(page)
     SHOTS.mkdir(parents=True, exist_ok=True)
     page.screenshot(path=str(SHOTS / f"explore-{where}.png"))
     page.locator(".ie-w-presenter button").click()
@@ -146,6 +173,7 @@ def test_explore_sizes_and_presenter(page, server, where):
                            timeout=20_000)
     page.wait_for_timeout(1200)
     big = check_layout(page, size, EXPLORE, scrolls=not fits)
+    assert_strip_ticks_apart(page)
     if not fits:                    # a tablet or phone: one scrolling column, titles fit
         return
     for n in EXPLORE:
@@ -160,17 +188,31 @@ def test_compare_fills_its_room(page, server, where):
     open_page(page, server, size)
     show_mode(page, "Compare")
     names = tuple(f"compare_fig3{c}" for c in "abcdef") + tuple(f"compare_fig7{c}" for c in "abcd")
-    page.wait_for_function("""() => { const d = Bokeh.documents[0];
-        return ['compare_fig3f', 'compare_fig7d'].every((n) => {
-          const f = d.get_model_by_name(n);
-          return f && f.renderers[0].data_source.data[Object.keys(f.renderers[0].data_source.data)[0]].length > 0; }); }""",
-                           timeout=90_000)
+    page.wait_for_function(COMPARE_FILLED, timeout=90_000)
     page.wait_for_timeout(800)
     frames = check_layout(page, size, names, scrolls=size[0] < 900)
     assert all(frames[n]["box"][1] > 0 for n in names)        # below the header
     for n in SCENE_VIEWS:                                      # explore gave up its room
         assert n not in frames, n
     page.screenshot(path=str(SHOTS / f"compare-{where}.png"))
+
+
+def test_compare_from_a_link_is_laid_out_as_when_switched_to(page, server):
+    """At 1280 x 720, ``?mode=compare`` (the page built with the mode open) gives the
+    small multiples the same frames as a click on Compare after load: no page scroll."""
+    size = SIZES["projector"]
+    names = tuple(f"compare_fig3{c}" for c in "abcdef") + tuple(f"compare_fig7{c}" for c in "abcd")
+    frames = {}
+    for how in ("link", "switch"):
+        open_page(page, server, size, "?mode=compare" if how == "link" else "")
+        if how == "switch":
+            show_mode(page, "Compare")
+        page.wait_for_function(COMPARE_FILLED, timeout=90_000)
+        page.wait_for_timeout(800)
+        frames[how] = check_layout(page, size, names, scrolls=False)
+    for n in names:
+        link, switch = frames["link"][n], frames["switch"][n]
+        assert abs(link["w"] - switch["w"]) <= 1 and abs(link["h"] - switch["h"]) <= 1, (n, link, switch)
 
 
 @pytest.mark.parametrize("where", list(SIZES))
@@ -198,6 +240,17 @@ def test_research_owns_the_plot_area(page, server, where):
     if size == (1280, 720):
         f = frames["basins_figure"]
         assert f["w"] >= 700 and f["h"] >= 420, f
+    # a setting changed since the pictures were made: the note in their titles fits too
+    box = page.locator(".ie-w-c input").first
+    box.fill("0.1")
+    box.press("Enter")
+    for name, tab in (("basins_figure", None), ("regime_map_figure", "Regime map")):
+        if tab:
+            page.locator(".bk-tab", has_text=tab).first.click()
+        page.wait_for_function(f"() => ie.title('{name}').includes('settings changed')",
+                               timeout=20_000)
+        page.wait_for_timeout(1200)         # titles fitted
+        check_layout(page, size, (name,), scrolls=size[0] < 900)
 
 
 def test_tablet_has_omega_and_two_scene_views_on_screen(page, server):
