@@ -59,6 +59,8 @@ def make_figure(name: str, title: str, x_label: str, y_label: str, **kw):
 #: ("(settings changed: compute again)" -> "(settings changed)"), then without the
 #: head's detail after its first ", " ("Basins at phase 0, 100×100 starts — …" ->
 #: "Basins at phase 0 — …"), each fitted the same way (the last one down to 11 px).
+#: An x axis label wider than its frame is drawn without its hint after "; " ("time τ (s);
+#: zoom out: 250–500 s" -> "time τ (s)"), and gets it back when the frame is wide enough.
 #: Only the drawing changes (a silent set, then the text property's own change signal for
 #: the title's view: nothing goes back to the server); the text and
 #: size the server sets stay the base, so a wider frame gets them back. Checked twice a
@@ -113,8 +115,31 @@ if (!window.__ieFitTitles) {
       }
     }
   }
-  setInterval(fit, 500)
+  const labels = new Map(), labelShown = new Map()
+  const fitLabels = () => {
+    for (const v of Bokeh.index.query((v) => v.model.constructor.__name__ === "Figure")) {
+      if (v.el.getBoundingClientRect().width === 0) continue
+      for (const axis of v.model.below) {
+        const now = axis.axis_label
+        if (typeof now !== "string" || !now) continue
+        if (labelShown.get(axis.id) !== now) labels.set(axis.id, now)
+        const full = labels.get(axis.id), cut = full.indexOf("; ")
+        ctx.font = `${axis.axis_label_text_font_style} ${px(axis.axis_label_text_font_size)}px ${axis.axis_label_text_font}`
+        const pick = cut > 0 && ctx.measureText(full).width > v.frame.bbox.width
+          ? full.slice(0, cut) : full
+        if (pick !== now) {
+          labelShown.set(axis.id, pick)
+          axis.setv({axis_label: pick}, {silent: true})
+          axis.properties.axis_label.change.emit()
+          v.invalidate_layout()
+          setTimeout(() => { axis.change.emit(); v.invalidate_layout() }, 100)
+        }
+      }
+    }
+  }
+  setInterval(() => { fit(); fitLabels() }, 500)
   fit()
+  fitLabels()
 }
 """
 

@@ -48,7 +48,8 @@ FRAMES = """() => {
   }
   return out;
 }"""
-#: Title text wider than its frame (drawn clipped): [name, text width, frame width].
+#: Title or x axis label wider than its frame (drawn clipped): [name, text width, frame
+#: width].
 CLIPPED = """() => {
   const ctx = document.createElement("canvas").getContext("2d");
   const out = [];
@@ -59,6 +60,13 @@ CLIPPED = """() => {
     ctx.font = `${t.text_font_style} ${size} ${t.text_font}`;
     const w = ctx.measureText(t.text).width;
     if (w > v.frame.bbox.width + 0.5) out.push([v.model.name, w, v.frame.bbox.width]);
+    for (const a of v.model.below) {
+      if (typeof a.axis_label !== "string" || !a.axis_label) continue;
+      const s = a.axis_label_text_font_size;
+      ctx.font = `${a.axis_label_text_font_style} ${typeof s === "string" ? s : s.value} ${a.axis_label_text_font}`;
+      const wl = ctx.measureText(a.axis_label).width;
+      if (wl > v.frame.bbox.width + 0.5) out.push([v.model.name + " x label", wl, v.frame.bbox.width]);
+    }
   }
   return out;
 }"""
@@ -123,7 +131,7 @@ def overlap(a, b) -> bool:
 
 def check_layout(page, size, names, scrolls: bool) -> dict:
     """Every figure in ``names`` shown; none overlapping another; no sideways scroll;
-    no clipped title (the text drawn no wider than its frame); with ``scrolls`` False,
+    no clipped title or x axis label (drawn no wider than its frame); with ``scrolls`` False,
     everything inside the window."""
     w, h = size
     frames = page.evaluate(FRAMES)
