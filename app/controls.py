@@ -318,8 +318,9 @@ class Controls:
             margin=0)
         self.top = top = pn.Column(bar, self.header, css_classes=["ie-top"], stylesheets=[TOP_CSS],
                         sizing_mode="stretch_width", margin=0)
-        # (the message pane joins the line with the first message: a model less per page)
-        self.info = info = pn.Row(self.caption, self.badge, self.stability,
+        # the message pane is in the line from the start: inserting it later re-sends the
+        # line's other models in full, which a Bokeh client warns about
+        self.info = info = pn.Row(self.message_pane, self.caption, self.badge, self.stability,
                       self.diagram_status, css_classes=["ie-info"],
                       stylesheets=[INFO_CSS], sizing_mode="stretch_width", margin=0)
         cells = [v for v in views if v.figure is not None and not v.under]
@@ -405,8 +406,6 @@ class Controls:
         self.message = text
         self.message_pane.object = text
         self.message_pane.visible = True
-        if self.message_pane not in self.info.objects:
-            self.info.insert(0, self.message_pane)
 
     def clear_message(self) -> None:
         if self.message:
