@@ -38,6 +38,7 @@ sys.path.insert(0, str(ROOT / "bench"))
 
 import impactlib as il  # noqa: E402
 from bench_speed import OMEGAS, PAPER, T_END, T_RECORD, profile_diagram, regime_grid  # noqa: E402
+from bench_stability import write_section  # noqa: E402
 from impactlib.kernels import engine as E  # noqa: E402
 from impactlib.model import RunLimits, check_run  # noqa: E402
 from prototype import prototype  # noqa: E402
@@ -192,16 +193,6 @@ def markdown(t, d, m):
     return "\n".join([BEGIN] + rows + [END]) + "\n"
 
 
-def write_section(text, path=ROOT / "BENCHMARKS.md"):
-    old = path.read_text() if path.exists() else ""
-    if BEGIN in old and END in old:
-        head, rest = old.split(BEGIN, 1)
-        new = head + text.rstrip("\n") + rest.split(END, 1)[1]
-    else:
-        new = old.rstrip("\n") + "\n\n" + text
-    path.write_text(new)
-
-
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--write", action="store_true", help="write the section of BENCHMARKS.md")
@@ -218,7 +209,7 @@ def main():
     text = markdown(t, d, m)
     print(text)
     if args.write:
-        write_section(text)
+        write_section(text, BEGIN, END)
 
 
 if __name__ == "__main__":

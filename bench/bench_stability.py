@@ -131,11 +131,13 @@ def markdown(out) -> str:
     return "\n".join([BEGIN] + rows + [END]) + "\n"
 
 
-def write_section(text, path=ROOT / "BENCHMARKS.md"):
+def write_section(text, begin=BEGIN, end=END, path=ROOT / "BENCHMARKS.md"):
+    """Put ``text`` (which starts with ``begin`` and ends with ``end``) in place of the
+    section between those markers in ``path``, or after the end of it."""
     old = path.read_text() if path.exists() else ""
-    if BEGIN in old and END in old:
-        head, rest = old.split(BEGIN, 1)
-        new = head + text.rstrip("\n") + rest.split(END, 1)[1]
+    if begin in old and end in old:
+        head, rest = old.split(begin, 1)
+        new = head + text.rstrip("\n") + rest.split(end, 1)[1]
     else:
         new = old.rstrip("\n") + "\n\n" + text
     path.write_text(new)
