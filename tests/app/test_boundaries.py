@@ -108,12 +108,7 @@ def test_the_diagram_marks_the_events_the_curves_start_from(make_explorer):
     each within 1e-8 in omega. With the overlay's six seeds: the one at omega = 2.9
     settles on an orbit (9 impacts in 4 periods) that the diagram's own seeds miss."""
     from app import branches
-    branches.CACHE.clear()
-    boundaries.CACHE.clear()
-    e = make_explorer(map_n="8", boundaries="1", branches="1")
-    assert e.diagram.branch_job.done.wait(300)
-    e.research.compute(MAP)
-    assert e.research.job.done.wait(120) and e.research.boundary_job.done.wait(300)
+    e = _explorer_with_map_and_curves(make_explorer, "8")
     shown = e.branches.shown
     assert shown is not None and shown.complete, shown
     marked = {(ev.kind, ev.value) for ev in shown.events}
@@ -149,6 +144,20 @@ def test_the_diagram_marks_the_events_the_curves_start_from(make_explorer):
     assert checked >= 3, checked
     branches.CACHE.clear()
     boundaries.CACHE.clear()
+
+
+def _explorer_with_map_and_curves(make_explorer, map_n: str):
+    """A fresh explorer from ``make_explorer`` (no cached branches or curves) whose
+    diagram branches, regime map of ``map_n`` cells per side and boundary overlay are
+    done."""
+    from app import branches
+    branches.CACHE.clear()
+    boundaries.CACHE.clear()
+    e = make_explorer(map_n=map_n, boundaries="1", branches="1")
+    assert e.diagram.branch_job.done.wait(300)
+    e.research.compute(MAP)
+    assert e.research.job.done.wait(120) and e.research.boundary_job.done.wait(300)
+    return e
 
 
 def _located(b, k) -> list:
@@ -242,12 +251,7 @@ def test_the_diagram_marks_every_crossing_of_the_curves(make_explorer, monkeypat
 
     from app import branches
     monkeypatch.setattr(branches, "WALL_TIME", math.inf)    # complete on a loaded machine
-    branches.CACHE.clear()
-    boundaries.CACHE.clear()
-    e = make_explorer(map_n="20", boundaries="1", branches="1")
-    assert e.diagram.branch_job.done.wait(300)
-    e.research.compute(MAP)
-    assert e.research.job.done.wait(120) and e.research.boundary_job.done.wait(300)
+    e = _explorer_with_map_and_curves(make_explorer, "20")
     assert e.research.overlay.curves.complete, e.research.overlay.curves.message
     assert e.diagram.branch_job.done.wait(600)
     shown = e.branches.shown
