@@ -133,16 +133,17 @@ class MapEval:
         self.res = np.empty(E.NRES)
 
     def __call__(self, x, v):
-        """(z1, J, info) with info = (status, n_impacts, stuck, vmin)."""
+        """(x1, v1, J, info): the state one map later, the Jacobian as floats (j11, j12,
+        j21, j22), info = (status, n_impacts, stuck, vmin, n_rec, n_tail)."""
         x = max(x, self.p.g)
         res = self.res
         status = E.run_engine(self.sp, self.ctl, self.t0, x, v, self.buffers, res)
+        out = res.tolist()      # Python floats: Newton's 2 x 2 algebra runs on them
         # a mass that sticks at some point of the cycle: the map is locally constant
-        sticks = res[E.STUCK] != 0.0 or res[E.STUCK_MARKED] != 0.0
-        J = res[E.J11:E.J22 + 1].reshape(2, 2).copy()
-        return (res[E.X_F:E.V_F + 1].copy(), J,
-                (status, int(res[E.N_TOT]), sticks, res[E.VMIN], int(res[E.N_REC]),
-                 int(res[E.N_TAIL])))
+        sticks = out[E.STUCK] != 0.0 or out[E.STUCK_MARKED] != 0.0
+        return (out[E.X_F], out[E.V_F], tuple(out[E.J11:E.J22 + 1]),
+                (status, int(out[E.N_TOT]), sticks, out[E.VMIN], int(out[E.N_REC]),
+                 int(out[E.N_TAIL])))
 
     def impacts(self, n_rec):
         k = min(n_rec, IMPACT_CAP)
@@ -163,46 +164,65 @@ def settle_starts(p: Params, phase: float, n: int = 1, tries: int = 8):
     return pts[::n][:tries]
 
 
+def _solve_shifted(J, fx, fv):
+    """dz with (J - I) dz = -F, by Cramer's rule (None when J - I is singular)."""
+    a, b, c, d = J[0] - 1.0, J[1], J[2], J[3] - 1.0
+    det = a * d - b * c
+    if det == 0.0 or not math.isfinite(det):
+        return None
+    return (-fx * d + fv * b) / det, (-fv * a + fx * c) / det
+
+
 def _newton(f, p, x0, v0):
-    z = np.array([x0, v0])
-    z1, J, info = f(*z)
-    F = z1 - z
+    # 2-vectors as Python floats: numpy's per-call cost on 2 elements exceeds the map's
+    x, v = float(x0), float(v0)
+    x1, v1, J, info = f(x, v)
+    fx, fv = x1 - x, v1 - v
     converged = False
     it = 0
     message = ""
     for it in range(1, NEWTON_MAX + 1):
-        scale = 1.0 + np.max(np.abs(z))
-        if np.max(np.abs(F)) <= NEWTON_TOL * scale:
+        scale = 1.0 + max(abs(x), abs(v))
+        fn = max(abs(fx), abs(fv))
+        if fn <= NEWTON_TOL * scale:
             converged = True
             break
-        try:
-            dz = np.linalg.solve(J - np.eye(2), -F)
-        except np.linalg.LinAlgError:
+        dz = _solve_shifted(J, fx, fv)
+        if dz is None:
             message = "Newton stopped: the map's Jacobian has a multiplier 1 here"
             break
-        if not np.all(np.isfinite(dz)):
+        dx, dv = dz
+        if not (math.isfinite(dx) and math.isfinite(dv)):
             message = "Newton stopped: non-finite step (grazing impact?)"
             break
         lam = 1.0
-        fn = np.max(np.abs(F))
         for _ in range(12):
-            zt = z + lam * dz
-            zt[0] = max(zt[0], p.g)
-            z1t, Jt, infot = f(*zt)
-            Ft = z1t - zt
-            if np.max(np.abs(Ft)) < fn or lam < 1e-3:
+            xt, vt = max(x + lam * dx, p.g), v + lam * dv
+            x1t, v1t, Jt, infot = f(xt, vt)
+            fxt, fvt = x1t - xt, v1t - vt
+            if max(abs(fxt), abs(fvt)) < fn or lam < 1e-3:
                 break
             lam *= 0.5
-        z, z1, J, info, F = zt, z1t, Jt, infot, Ft
+        x, v, J, info, fx, fv = xt, vt, Jt, infot, fxt, fvt
     else:
         message = f"Newton did not converge in {NEWTON_MAX} steps"
-    return z, z1, J, info, F, converged, it, message
+    return x, v, J, info, (fx, fv), converged, it, message
 
 
 def multipliers_of(J) -> np.ndarray:
-    mu = np.linalg.eigvals(J).astype(complex) if np.all(np.isfinite(J)) else \
-        np.array([complex(np.nan), complex(np.nan)])
-    return mu[np.argsort(-np.abs(mu), kind="stable")]
+    """Eigenvalues of the 2 x 2 matrix J (flat or 2 x 2), largest modulus first."""
+    a, b, c, d = (float(e) for e in np.ravel(J))
+    if not all(math.isfinite(e) for e in (a, b, c, d)):
+        return np.array([complex(np.nan), complex(np.nan)])
+    # lambda = (a + d) / 2 +- sqrt(((a - d) / 2)^2 + b c): no cancellation in the
+    # discriminant from trace^2 / 4 - det; the smaller root from det / the larger
+    h, disc = 0.5 * (a + d), (0.5 * (a - d)) ** 2 + b * c
+    if disc < 0.0:
+        w = math.sqrt(-disc)
+        return np.array([complex(h, w), complex(h, -w)])
+    big = h + math.copysign(math.sqrt(disc), h)
+    small = (a * d - b * c) / big if big != 0.0 else 0.0
+    return np.array([complex(big), complex(small)])
 
 
 def orbit_label(m, n, sticks, chatter):
@@ -217,9 +237,8 @@ def orbit_label(m, n, sticks, chatter):
 def _minimal_period(f, z, n, tol):
     for d in range(1, n):
         if n % d == 0:
-            fd = MapEval(f.p, d, f.t0)
-            zd, _, _ = fd(*z)
-            if np.max(np.abs(zd - z)) <= tol:
+            xd, vd, _, _ = MapEval(f.p, d, f.t0)(*z)
+            if max(abs(xd - z[0]), abs(vd - z[1])) <= tol:
                 return d
     return n
 
@@ -266,15 +285,16 @@ def periodic_orbit(p: Params, n: int = 1, x0: float | None = None, v0: float | N
     else:
         starts = [(float(x0), float(v0))]
     for x_start, v_start in starts:
-        z, z1, J, info, F, converged, it, message = _newton(f, p, x_start, v_start)
+        x, v, J, info, F, converged, it, message = _newton(f, p, x_start, v_start)
         if converged:
             break
-    residual = float(np.max(np.abs(F)))
+    z = (x, v)
+    residual = max(abs(F[0]), abs(F[1]))
     status, m, sticks, vmin, n_rec, n_tail = info
     imp_t, imp_v = f.impacts(n_rec)
     # a chatter summed to its accumulation point: infinitely many impacts in the cycle
     chatter = n_tail > 0
-    d = _minimal_period(f, z, n, 1e-8 * (1.0 + np.max(np.abs(z)))) if converged else n
+    d = _minimal_period(f, z, n, 1e-8 * (1.0 + max(abs(x), abs(v)))) if converged else n
     if sticks:
         mu = np.zeros(2, dtype=complex)
         J = np.zeros((2, 2))
@@ -282,7 +302,8 @@ def periodic_orbit(p: Params, n: int = 1, x0: float | None = None, v0: float | N
         message = f"{message}; {note}" if message else note
     else:
         mu = multipliers_of(J)
-    stable = bool(np.all(np.abs(mu) < 1.0))
+        J = np.array(J).reshape(2, 2)
+    stable = bool(abs(mu[0]) < 1.0 and abs(mu[1]) < 1.0)
     label = orbit_label(m, n, sticks, chatter)
     if d < n:
         label += f" (repeats after {d} period{'s' if d > 1 else ''})"
@@ -291,7 +312,7 @@ def periodic_orbit(p: Params, n: int = 1, x0: float | None = None, v0: float | N
     # between impacts the exact motion never passes the wall; an impact at (or below)
     # zero speed is a grazing, where the orbit sits on the border of admissibility
     admissible = bool(converged and (m == 0 or sticks or np.all(imp_v < 0.0)))
-    return PeriodicOrbit(params=p, x=float(z[0]), v=float(z[1]), n=n, phase=phase,
+    return PeriodicOrbit(params=p, x=x, v=v, n=n, phase=phase,
                          impacts=math.inf if chatter else m, label=label, multipliers=mu,
                          stable=stable, admissible=admissible, converged=converged,
                          residual=residual, sticks=bool(sticks), iterations=it,

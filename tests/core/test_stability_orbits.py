@@ -151,3 +151,31 @@ def test_contract_names_and_signatures():
     assert br.x.shape == br.v.shape == br.stable.shape == br.admissible.shape == (k,)
     assert br.multipliers.shape == (k, 2) and br.multipliers.dtype == complex
     assert isinstance(br.events, list)
+
+
+def test_multipliers_of_a_2x2_match_lapack_and_keep_their_order():
+    """The closed-form 2 x 2 eigenvalues against LAPACK's (np.linalg.eigvals) on random
+    matrices: real pairs, complex pairs, a defective one, a near-singular one; largest
+    modulus first. Tolerance: a few ulps of the matrix norm, and sqrt(eps) of it where
+    the pair is nearly repeated (eigenvalues of a 2 x 2 move as the square root of a
+    perturbation there, for LAPACK as for the formula)."""
+    from impactlib.analysis.orbits import multipliers_of
+
+    rng = np.random.default_rng(20261125)
+    mats = [rng.normal(size=(2, 2)) * 10.0 ** rng.uniform(-3, 1) for _ in range(400)]
+    mats += [np.array([[0.7, 1.0], [0.0, 0.7]]), np.array([[0.6902, 0.0], [0.0, 0.6773]]),
+             np.array([[1e-9, 2.0], [3.0, 1e-9]]), np.array([[0.0, -1.0], [1.0, 0.0]]),
+             np.array([[2.0, 4.0], [1.0, 2.0 + 1e-14]])]
+    for J in mats:
+        got = multipliers_of(J)
+        ref = np.linalg.eigvals(J).astype(complex)
+        ref = ref[np.argsort(-np.abs(ref), kind="stable")]
+        norm = np.abs(J).max()
+        gap = abs(ref[0] - ref[1])
+        tol = 8 * np.finfo(float).eps * norm * (1 + norm / max(gap, 1e-300)) \
+            if gap > 1e-6 * norm else 4 * math.sqrt(np.finfo(float).eps) * norm
+        assert abs(got[0]) >= abs(got[1])
+        # as sets (a conjugate pair's order is LAPACK's: positive imaginary part first)
+        assert min(abs(got[0] - ref[0]) + abs(got[1] - ref[1]),
+                   abs(got[0] - ref[1]) + abs(got[1] - ref[0])) <= 2 * tol, (J, got, ref)
+        assert abs(got[0] * got[1] - np.linalg.det(J)) <= 16 * np.finfo(float).eps * norm ** 2 + tol * norm
