@@ -706,16 +706,18 @@ def tail_length(sp, t, target, tb):
 
 
 @jit
-def impact_outcome(sp, t, vplus, rate, tail_tol):
+def impact_outcome(sp, t, vplus, rate, tail_tol, t_stop):
     """What follows an impact at time t with rebound velocity vplus = -r v(t-) >= 0.
 
     Returns (mode, t_next): FLY from t (vplus > 0, or at rest with the force pushing
     off), or STICK from t_next.  The rest of a chatter (infinitely many hops) is summed
-    (:func:`tail_bound`, :func:`tail_length`) as soon as the bound on the accumulation time's error is at
-    rounding level, 4 eps (|t| + tau) as for an impact time, or else once one hop lasts
-    under tail_tol time scales (its error is then O(vplus^3), far below the hop's own
-    rounding, ~eps X / vplus); before that the hops are resolved one by one.  The mass
-    sticks at t + tau, provided the push has not turned outwards by then.
+    (:func:`tail_bound`, :func:`tail_length`) as soon as the bound on the accumulation
+    time's error is at rounding level, 4 eps (|t| + tau) as for an impact time, unless the
+    tail would pass t_stop (the next time the run reports a state: its hops are resolved
+    up to there instead, since a summed tail reports the mass at rest); at the latest
+    once one hop lasts under tail_tol time scales (its error is then O(vplus^3), far below
+    the hop's own rounding).  The mass sticks at t + tau, provided the push has not
+    turned outwards by then.
     """
     r = sp[R]
     if vplus <= 0.0:
@@ -728,13 +730,16 @@ def impact_outcome(sp, t, vplus, rate, tail_tol):
     if not (r < 1.0 and a0 > 0.0 and 2.0 * vplus * rate <= TAIL_CHECK * a0):
         return FLY, t
     ok, target, err, tb = tail_bound(sp, t, vplus)
+    late = 2.0 * vplus * rate <= tail_tol * a0
     # target / a0 is tau to first order (tau >= target / max A would be strict)
-    if not ok or (err > 4.0 * EPS * (abs(t) + target / a0) and 2.0 * vplus * rate > tail_tol * a0):
+    if not ok or not (late or err <= 4.0 * EPS * (abs(t) + target / a0)):
         return FLY, t
     tau = tail_length(sp, t, target, tb)
     if not tau > 0.0:
         return FLY, t
     ts = t + tau
+    if not late and ts > t_stop:
+        return FLY, t
     if release_time(sp, t) > ts and wall_force(sp, ts) <= 0.0:
         return STICK, ts
     return FLY, t

@@ -137,7 +137,7 @@ def test_bound_refuses_where_the_push_turns_outwards_before_the_tail_ends():
     assert push(p, t0) > 0
     ok, target, err, tb = tail_bound(sp, t0, v0)
     assert not ok
-    mode, tn = impact_outcome(sp, t0, v0, p.rate(), TAIL_TOL)
+    mode, tn = impact_outcome(sp, t0, v0, p.rate(), TAIL_TOL, math.inf)
     assert mode == FLY and tn == t0
     R = mp_cached(p, 2000, p.g, v0, t0, t0 + 1.0)
     sol = il.simulate(p, t_end=t0 + 1.0, x0=p.g, v0=v0, t0=t0, t_record=t0)
@@ -160,10 +160,10 @@ def test_bound_refuses_a_stiff_spring_and_the_run_goes_on_hop_by_hop():
     ok, target, err, tb = tail_bound(sp_soft, t0, v0)
     tau = tail_length(sp_soft, t0, target, tb)
     assert ok and err <= 4 * EPS * (t0 + tau)
-    assert impact_outcome(sp_soft, t0, v0, soft.rate(), TAIL_TOL)[0] == STICK
+    assert impact_outcome(sp_soft, t0, v0, soft.rate(), TAIL_TOL, math.inf)[0] == STICK
     ok, target, err, tb = tail_bound(sp_stiff, t0, v0)
     assert not ok or err > 4 * EPS * (t0 + target / push(stiff, t0))
-    assert impact_outcome(sp_stiff, t0, v0, stiff.rate(), TAIL_TOL)[0] == FLY
+    assert impact_outcome(sp_stiff, t0, v0, stiff.rate(), TAIL_TOL, math.inf)[0] == FLY
     R = mp_cached(stiff, 5000, stiff.g, v0, t0, t0 + 0.01)
     sol = il.simulate(stiff, t_end=t0 + 0.01, x0=stiff.g, v0=v0, t0=t0, t_record=t0)
     assert R.chatter_ends and sol.n_chatter == 1 and sol.impacts.t.size >= 2
@@ -172,3 +172,25 @@ def test_bound_refuses_a_stiff_spring_and_the_run_goes_on_hop_by_hop():
     X = steady_orbit(stiff)[2] + abs(stiff.g)
     assert abs(s - s_ref) <= 8 * EPS * X / ((1 - stiff.r) * v_last) + ref_error(stiff, s_ref)
     np.testing.assert_allclose(sol.impacts.t, R.t[:sol.impacts.t.size], rtol=0, atol=16 * EPS * t0)
+
+
+def test_a_run_ending_inside_a_summable_tail_resolves_its_hops_up_to_the_end():
+    """A summed tail reports the mass at rest from its first summed hop on, so a tail is
+    summed early only if it ends before the run's next reported state.  omega = 0.2: the
+    run to 25 sums its chatter at an impact more than 3e-5 before the accumulation time;
+    a run ending 3e-5 before it reports the flight state of the hop in progress, as the
+    reference does (rounding model of test_exact_accuracy: a hop of speed v is timed to
+    ~eps X / v, so x to 8 eps X and v to 8 eps X A / v)."""
+    p, t_end = CHATTERS["omega=0.2"]
+    full = il.simulate(p, t_end=t_end, t_record=0.0)
+    s_ref = chatter_reference("omega=0.2").chatter_ends[0]
+    t_stop = s_ref - 3e-5
+    assert full.impacts.t[full.impacts.t <= full.sticking[0, 0]][-1] < t_stop
+    R = mp_cached(p, 100_000, t_max=t_stop)
+    sol = il.simulate(p, t_end=t_stop, t_record=0.0)
+    assert R.reason == "t_max" and R.v_end > 0
+    t, x, v, stuck = sol.final
+    assert not stuck and sol.impacts.t.size == R.t.size
+    X = steady_orbit(p)[2] + abs(p.g)
+    assert abs(x - R.x_end) <= 8 * EPS * X
+    assert abs(v - R.v_end) <= 8 * EPS * X * push(p, t) / R.v_end
