@@ -598,7 +598,7 @@ def next_impact_grid(sp, seg, s_end, hmax, max_steps, grid, s_guess):
     return kind, sr, vr, ns + evals
 
 
-#: a chatter is not tested for summation while its hop lasts over this many time scales
+#: a chatter is not tested for early summation while its hop lasts over this many time scales
 #: (tail_bound cannot be met there: this spares its cost after most impacts)
 TAIL_CHECK = 1e-2
 #: the tail's remainder bound must hold on an interval this many times the tail's estimate
@@ -684,6 +684,21 @@ def tail_bound(sp, t, v0):
 
 
 @jit
+def tail_floor_terms(sp, v0, a0):
+    """A lower bound of :func:`tail_bound`'s err from two of its terms alone, without
+    trigonometry: where it exceeds the tolerance the bound need not be computed.
+
+    Its A'' term gives e1 >= (omega^2 / m) tb / dl^2, so err >= (2/3) e1 v0^2 /
+    ((1 - r)^2 a0); its spring term err >= 2 q v0^3 / (3 a0^3) (dl <= min A <= a0,
+    q >= r).  a0 > 0 is the push A at the impact.  Returns (floor, tb)."""
+    r, m = sp[R], sp[M]
+    tb = TAIL_SPAN * 2.0 * v0 / ((1.0 - r) * a0)
+    low = v0 * v0 / (a0 * a0 * a0) * ((2.0 / 3.0) * sp[OM] * sp[OM] / m * tb / ((1.0 - r) * (1.0 - r))
+                                      + (2.0 / 3.0) * sp[K] / m * v0)
+    return low, tb
+
+
+@jit
 def tail_length(sp, t, target, tb):
     """The root tau in (0, tb] of F(t + tau) - F(t) = target (:func:`tail_bound`; F' = A
     is at least its positive minimum there, so the root is unique); -1 if Newton leaves
@@ -726,11 +741,16 @@ def impact_outcome(sp, t, vplus, rate, tail_tol, t_stop):
             return FLY, t
         return STICK, t
     m = sp[M]
-    a0 = -(wall_force(sp, t) - 2.0 * sp[C_] * vplus) / m
-    if not (r < 1.0 and a0 > 0.0 and 2.0 * vplus * rate <= TAIL_CHECK * a0):
+    push = -wall_force(sp, t) / m
+    a0 = push + 2.0 * sp[C_] * vplus / m
+    if not (r < 1.0 and push > 0.0 and 2.0 * vplus * rate <= TAIL_CHECK * a0):
         return FLY, t
-    ok, target, err, tb = tail_bound(sp, t, vplus)
     late = 2.0 * vplus * rate <= tail_tol * a0
+    if not late:
+        low, tb = tail_floor_terms(sp, vplus, push)
+        if low > 4.0 * EPS * (abs(t) + tb):
+            return FLY, t
+    ok, target, err, tb = tail_bound(sp, t, vplus)
     # target / a0 is tau to first order (tau >= target / max A would be strict)
     if not ok or not (late or err <= 4.0 * EPS * (abs(t) + target / a0)):
         return FLY, t
@@ -755,4 +775,4 @@ def phase_of(t, om):
     return ph
 
 
-__all__ = ["safe_step", "next_impact", "next_impact_grid", "search_from", "search_grid", "short_hop", "tail_bound", "tail_length", "impact_outcome", "phase_of", "step_caps", "step_cap", "OM"]
+__all__ = ["safe_step", "next_impact", "next_impact_grid", "search_from", "search_grid", "short_hop", "tail_bound", "tail_floor_terms", "tail_length", "impact_outcome", "phase_of", "step_caps", "step_cap", "OM"]

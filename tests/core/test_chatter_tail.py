@@ -22,7 +22,8 @@ import pytest
 
 import impactlib as il
 from impactlib.kernels.engine import TAIL_TOL
-from impactlib.kernels.events import FLY, STICK, impact_outcome, tail_bound, tail_length
+from impactlib.kernels.events import (FLY, STICK, impact_outcome, tail_bound, tail_floor_terms,
+                                      tail_length)
 from impactlib.kernels.flight import system_constants
 from impactlib.verify.report import CASE_BY_NAME, reference, steady_orbit
 
@@ -194,3 +195,28 @@ def test_a_run_ending_inside_a_summable_tail_resolves_its_hops_up_to_the_end():
     X = steady_orbit(p)[2] + abs(p.g)
     assert abs(x - R.x_end) <= 8 * EPS * X
     assert abs(v - R.v_end) <= 8 * EPS * X * push(p, t) / R.v_end
+
+
+def test_the_cheap_floor_never_exceeds_the_bound():
+    """impact_outcome skips tail_bound where tail_floor_terms already exceeds the
+    tolerance; that is safe only if the floor is a lower bound of the bound's err, checked
+    here over random parameters, times and rebounds (fixed seed)."""
+    rng = np.random.default_rng(18)
+    n = 0
+    for _ in range(20_000):
+        m, c = 10 ** rng.uniform(-2, 1), 10 ** rng.uniform(-3, 1) * rng.integers(0, 2)
+        k, g = 10 ** rng.uniform(-2, 4) * rng.integers(0, 2), rng.uniform(-1, 1)
+        r, om = rng.uniform(0.05, 0.99), 10 ** rng.uniform(-2, 1.5)
+        t, v0 = rng.uniform(0, 1e3), 10 ** rng.uniform(-9, -2)
+        p = il.Params(m=m, c=c, k=k, g=g, r=r, omega=om)
+        a0 = push(p, t)
+        if a0 <= 0:
+            continue
+        ok, target, err, tb = tail_bound(constants(p), t, v0)
+        if not ok:
+            continue
+        low, tb_floor = tail_floor_terms(constants(p), v0, a0)
+        assert tb_floor == pytest.approx(tb, rel=1e-12)
+        assert low <= err * (1 + 1e-12)
+        n += 1
+    assert n > 5000
