@@ -6,7 +6,7 @@ diagram's wall time on 2 threads and (with --map) the 200 x 200 regime map.
     .venv/bin/python bench/bench_chatter.py --map      # ... plus the regime map's wall and CPU
 
 Run it from two checkouts in the same minute to compare two versions of the chatter
-handling (each copy imports its own impactlib).  Kernel times are the minimum of three
+handling (each copy imports its own impactlib).  Kernel times are the minimum of seven
 runs of each value alone (``Solution.elapsed``); walls are medians after a warm-up.
 """
 from __future__ import annotations
@@ -31,7 +31,7 @@ def diagram_values():
     rows = []
     for om in OMEGAS:
         q = PAPER.replace(omega=float(om))
-        sols = [il.simulate(q, T_END, t_record=T_RECORD) for _ in range(3)]
+        sols = [il.simulate(q, T_END, t_record=T_RECORD) for _ in range(7)]
         s = sols[0]
         rows.append((min(x.elapsed for x in sols), s.n_impacts, s.n_chatter, s.nsteps))
     return np.array(rows)
