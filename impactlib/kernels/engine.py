@@ -28,7 +28,7 @@ from .tangent import flow_jacobian, qr_step, saltation, tangent_product
 
 HOP_MEMORY = 8           # hops remembered for predicting the next one
 HOP_MATCH_RTOL = 1e-3    # ... if it left the wall this close in speed
-TAIL_TOL = 1e-6          # a chatter is summed once one hop lasts under this many time scales
+TAIL_TOL = 1e-6          # a chatter is summed at the latest once one hop lasts under this many time scales
 
 #: method codes (ctl[METHOD])
 METHOD_IDS = {"exact": 0, "rk4": 1, "rk45": 2}
@@ -111,6 +111,20 @@ def _record_impact(imp_t, imp_v, n_rec, t, vm, t_record):
             imp_v[n_rec] = vm
         n_rec += 1
     return n_rec
+
+
+@jit
+def _next_report(t, t_end, pc_t, ip, d_t, idn, marks, im):
+    """The next time after t the run reports a state (a sample, a mark or its end): a
+    chatter's tail is summed early only if it ends before (events.impact_outcome)."""
+    ts = t_end
+    if ip < pc_t.shape[0] and pc_t[ip] > t:
+        ts = min(ts, pc_t[ip])
+    if idn < d_t.shape[0] and d_t[idn] > t:
+        ts = min(ts, d_t[idn])
+    if im < marks.shape[0] and marks[im] > t:
+        ts = min(ts, marks[im])
+    return ts
 
 
 @jit
@@ -199,7 +213,8 @@ def run_engine(sp, ctl, t, x, v, buf, res):
             v = -r * v
         if v <= 0.0:
             v = 0.0
-        mode, tn = impact_outcome(sp, t, v, rate, TAIL_TOL)
+        mode, tn = impact_outcome(sp, t, v, rate, TAIL_TOL,
+                                  _next_report(t, t_end, pc_t, ip, d_t, idn, marks, im))
         if mode == STICK:
             ip = _sample_rest(g, tn, pc_t, pc_x, pc_v, ip)
             idn = _sample_rest(g, tn, d_t, d_x, d_v, idn)
@@ -297,7 +312,8 @@ def run_engine(sp, ctl, t, x, v, buf, res):
         vplus = -r * vh
         if vplus <= 0.0:
             vplus = 0.0
-        mode, tn = impact_outcome(sp, t, vplus, rate, TAIL_TOL)
+        mode, tn = impact_outcome(sp, t, vplus, rate, TAIL_TOL,
+                                  _next_report(t, t_end, pc_t, ip, d_t, idn, marks, im))
         if mode == STICK:
             if tn > t and t >= t_record:
                 n_tail += 1

@@ -17,8 +17,8 @@ Where a case amplifies rounding the tolerance is not loosened by hand but measur
   evaluates the tiny last hops as x = h + x_p, a difference of O(X) terms (X = forced
   amplitude + |g|), so a hop of speed v is timed to ~eps X / v and the summed tail starts
   from a speed known to ~a eps X / v: the accumulation time is off by ~2 eps X / ((1-r) v),
-  v the last recorded impact speed (the tail is summed once a hop lasts < 1e-6 time
-  scales, v ~ 1e-7..1e-9).  Tolerance: 4 times that model (8 eps X / ((1-r) v)), and
+  v the last recorded impact speed (the tail is summed once its error bound is at
+  rounding level, test_chatter_tail: v ~ 1e-5..1e-7).  Tolerance: 4 times that model (8 eps X / ((1-r) v)), and
   test_chatter_rounding_spread measures the spread directly.
 * the preload 0.5 transient amplifies rounding about tenfold per impact after t ~ 20:
   test_preload_transient_error_tracks_the_ulp_sensitivity compares the error impact by
