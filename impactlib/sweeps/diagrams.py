@@ -28,7 +28,8 @@ from ..kernels.engine import METHOD_IDS, Buffers
 from ..parallel import executor as _executor
 from ..parallel import run_blocks, worker_count
 from ..progress import reporter, stopped
-from ..simulate import section_times, simulate
+from ..kernels.entry import section_times
+from ..simulate import simulate
 from ..io.result import SweepResult
 
 CAP_PER_VALUE = 4096        # impacts kept per value; more are counted, flagged in status
