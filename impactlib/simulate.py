@@ -212,9 +212,9 @@ def simulate(p: Params, t_end: float = 500.0, x0: float | None = None, v0: float
         d_t = np.array(dense, dtype=float)
     tic = time.perf_counter()
     out, counts = entry.simulate_run(p.m, p.c, p.k, p.g, p.r, p.omega, float(t0), x0, v0,
-                                   t_record, t_end, phase, METHOD_IDS[method],
-                                   0.0 if dt is None else dt, rtol, atol, float(max_impacts),
-                                   max_steps, d_t)
+                                     t_record, t_end, phase, METHOD_IDS[method],
+                                     0.0 if dt is None else dt, rtol, atol,
+                                     float(max_impacts), max_steps, d_t)
     elapsed = time.perf_counter() - tic
     (st, n_keep, cap, n_stick, n_stuck_max, n_pc, k_pc, k_d, tf, xf, vf, stuck, n_tot, n_tail,
      nsteps) = counts

@@ -1,11 +1,12 @@
 """The entry of a whole simulate() run from Python: one jitted call from the parameters
 and the settings as scalars to the filled outputs.
 
-Numba's dispatcher spends about as long on each array argument as on a short kernel, and
-a second call for the setup costs as much again; so the run's constants, controls,
-section times and output arrays are made here, the retry for a window holding more
+Every call from Python pays Numba's dispatch (microseconds, more for each array
+argument) and every array made in Python a few more; so the run's constants, controls,
+section times and output array are made here, the retry for a window holding more
 impacts than the first guess is taken here, and the outcome comes back as one float
-array (the outputs, laid out below) and a tuple of counts and the final state.
+array (the outputs, laid out in :func:`simulate_run`'s docstring) and a tuple of counts
+and the final state.
 """
 from __future__ import annotations
 
