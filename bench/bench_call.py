@@ -36,15 +36,17 @@ def main() -> None:
     calls = ap.parse_args().calls
     p = PAPER
     sol = il.simulate(p, 500.0, t_record=250.0)
+    limits = RunLimits()        # as simulate()'s default: made once
     sp, rate, hmax = run_constants(p.m, p.c, p.k, p.g, p.r, p.omega)
-    ctl = E.controls(500.0, 250.0, hmax, rate, 0.0, 1e-6, 1e-9, RunLimits().max_impacts,
-                     RunLimits().max_steps, E.EXACT, E.NO_TANGENT)
+    ctl = E.controls(500.0, 250.0, hmax, rate, 0.0, 1e-6, 1e-9, limits.max_impacts,
+                     limits.max_steps, E.EXACT, E.NO_TANGENT)
     pc_t = section_times(250.0, 500.0, 0.0, p.T)
     cap = 1024
     imp_t, imp_v = np.empty(cap), np.empty(cap)
     stick = np.empty((128, 2))
     pc_x, pc_v = np.empty(pc_t.size), np.empty(pc_t.size)
     none, none2, res = np.empty(0), np.empty((0, 2)), np.empty(E.NRES)
+    max_impacts = float(limits.max_impacts)
 
     def kernel():
         E.run_from_python(sp, ctl, 0.0, 0.0, 0.0, imp_t, imp_v, stick, pc_t, pc_x, pc_v, none,
@@ -55,10 +57,10 @@ def main() -> None:
         "engine entry, arrays prepared": kernel,
         "simulate_run, arguments prepared": lambda: simulate_run(
             p.m, p.c, p.k, p.g, p.r, p.omega, 0.0, 0.0, 0.0, 250.0, 500.0, 0.0, E.EXACT, 0.0,
-            1e-6, 1e-9, float(RunLimits().max_impacts), RunLimits().max_steps, none),
+            1e-6, 1e-9, max_impacts, limits.max_steps, none),
         "check_run": lambda: check_run(p, t_end=500.0, t_record=250.0, x0=None, v0=0.0,
                                        phase=0.0, method="exact", dt=None, rtol=1e-6,
-                                       atol=1e-9, dense=0, limits=RunLimits()),
+                                       atol=1e-9, dense=0, limits=limits),
     }
     for fn in runs.values():
         for _ in range(100):
