@@ -3,16 +3,17 @@
     .venv/bin/python bench/bench_call.py [--calls 5000]
 
 One exact 500 s trajectory at the paper defaults (window [250, 500]), as bench_speed
-times it. Three timings, interleaved call by call in one process after a warm-up
+times it. Four timings, interleaved call by call in one process after a warm-up
 (medians): ``il.simulate(...)`` whole; the engine's entry (``run_from_python``) on
-arrays prepared once, i.e. the kernel and Numba's dispatch of its arguments; and the
-validation (``check_run``) alone. The Python layer is the first minus the second.
+arrays prepared once, i.e. the kernel and Numba's dispatch of its arguments; the one
+jitted call simulate() makes (``kernels.entry.simulate_run``: the run's setup, its
+output array and the engine), its scalar arguments prepared; and the validation
+(``check_run``) alone. The Python layer is the first minus the second.
 Prints only; on a shared machine compare the figures of one run.
 """
 from __future__ import annotations
 
 import argparse
-import importlib
 import sys
 import time
 from pathlib import Path
@@ -23,9 +24,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import impactlib as il  # noqa: E402
 from impactlib.kernels import engine as E  # noqa: E402
+from impactlib.kernels.entry import run_constants, section_times, simulate_run  # noqa: E402
 from impactlib.model import RunLimits, check_run  # noqa: E402
 
-S = importlib.import_module("impactlib.simulate")
 PAPER = il.Params(m=1.0, c=0.05, k=1.0, g=0.0, r=0.8, omega=2.0)
 
 
@@ -35,14 +36,17 @@ def main() -> None:
     calls = ap.parse_args().calls
     p = PAPER
     sol = il.simulate(p, 500.0, t_record=250.0)
-    sp, ctl, pc_t = S._run_setup(p.m, p.c, p.k, p.g, p.r, p.omega, 250.0, 500.0, 0.0, 0, 0.0,
-                                 1e-6, 1e-9, RunLimits().max_steps)
-    ctl[E.MAX_IMPACTS] = RunLimits().max_impacts
+    limits = RunLimits()        # as simulate()'s default: made once
+    sp, rate, hmax = run_constants(p.m, p.c, p.k, p.g, p.r, p.omega)
+    ctl = E.controls(500.0, 250.0, hmax, rate, 0.0, 1e-6, 1e-9, limits.max_impacts,
+                     limits.max_steps, E.EXACT, E.NO_TANGENT)
+    pc_t = section_times(250.0, 500.0, 0.0, p.T)
     cap = 1024
     imp_t, imp_v = np.empty(cap), np.empty(cap)
     stick = np.empty((128, 2))
     pc_x, pc_v = np.empty(pc_t.size), np.empty(pc_t.size)
     none, none2, res = np.empty(0), np.empty((0, 2)), np.empty(E.NRES)
+    max_impacts = float(limits.max_impacts)
 
     def kernel():
         E.run_from_python(sp, ctl, 0.0, 0.0, 0.0, imp_t, imp_v, stick, pc_t, pc_x, pc_v, none,
@@ -51,9 +55,12 @@ def main() -> None:
     runs = {
         "simulate()": lambda: il.simulate(p, 500.0, t_record=250.0),
         "engine entry, arrays prepared": kernel,
+        "simulate_run, arguments prepared": lambda: simulate_run(
+            p.m, p.c, p.k, p.g, p.r, p.omega, 0.0, 0.0, 0.0, 250.0, 500.0, 0.0, E.EXACT, 0.0,
+            1e-6, 1e-9, max_impacts, limits.max_steps, none),
         "check_run": lambda: check_run(p, t_end=500.0, t_record=250.0, x0=None, v0=0.0,
                                        phase=0.0, method="exact", dt=None, rtol=1e-6,
-                                       atol=1e-9, dense=0, limits=RunLimits()),
+                                       atol=1e-9, dense=0, limits=limits),
     }
     for fn in runs.values():
         for _ in range(100):

@@ -219,9 +219,37 @@ def _short_repr(value) -> str:
     return text if len(text) <= 60 else text[:57] + "..."
 
 
+def check_plain_run(p, t_end, t_record, x0, v0, phase, dense, limits):
+    """check_run's answer for an exact run given as Python floats (x0 and t_record may be
+    None) and a whole number of dense samples, in a few comparisons; None when anything
+    is of another type or out of range, so that the full checks word the message."""
+    if (type(p) is not Params or type(t_end) is not float or type(v0) is not float
+            or type(phase) is not float or type(dense) is not int):
+        return None
+    if t_record is None:
+        t_record = 0.5 * t_end
+    elif type(t_record) is not float:
+        return None
+    if x0 is None:
+        x0 = max(0.0, p.g)
+    elif type(x0) is not float:
+        return None
+    period = p.T
+    # chained comparisons are false for nan, so a nan anywhere takes the full checks
+    if (0.0 < t_end < math.inf and 0.0 <= t_record <= t_end and p.g <= x0 < math.inf
+            and -math.inf < v0 < math.inf and 0.0 <= phase <= period and dense >= 0
+            and (t_end - t_record) / period + 2 + dense <= limits.max_samples):
+        return t_end, t_record, x0, v0, phase
+    return None
+
+
 def check_run(p: Params, *, t_end, t_record, x0, v0, phase, method, dt, rtol, atol,
               dense, limits: RunLimits) -> tuple:
     """Validate a run's settings; return them as floats. One ValueError names every bad field."""
+    if method == "exact":
+        plain = check_plain_run(p, t_end, t_record, x0, v0, phase, dense, limits)
+        if plain is not None:
+            return plain + (dt, rtol, atol)
     problems: list[str] = []
     if not isinstance(p, Params):
         raise TypeError(f"p must be impactlib.Params, got {type(p).__name__}")

@@ -8,12 +8,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .kernels import engine as E
-from .kernels._jit import jit
+from .kernels import entry
 from .kernels.engine import METHOD_IDS
-from .kernels.events import step_cap
-from .kernels.flight import fastest_rate, system_constants
-from .model import RUN_MESSAGES, Params, RunLimits, RunStatus, check_run
+from .kernels.entry import run_constants as _run_constants
+from .model import RUN_MESSAGES, Params, RunLimits, RunStatus, check_plain_run, check_run
 from .io.result import Result
 
 
@@ -113,37 +111,6 @@ class Solution(Result):
         return self.status == RunStatus.OK
 
 
-@jit
-def section_times(t_lo, t_hi, phase, period):
-    """Poincare section times phase + n T inside [t_lo, t_hi] (a period's 1e-9 of slack
-    at the ends, so a section on an end is kept despite rounding)."""
-    n0 = math.ceil((t_lo - phase) / period - 1e-12)
-    n1 = math.floor((t_hi - phase) / period + 1e-12)
-    out = np.empty(max(0, n1 - n0 + 1))
-    n = 0
-    for i in range(out.shape[0]):
-        t = phase + period * (n0 + i)
-        if t_lo - 1e-9 * period <= t <= t_hi + 1e-9 * period:
-            out[n] = t
-            n += 1
-    return out[:n]
-
-
-@jit
-def _run_constants(m, c, k, g, r, omega):
-    sp = system_constants(m, c, k, g, r, omega)
-    return sp, fastest_rate(sp), step_cap(sp)
-
-
-@jit
-def _run_setup(m, c, k, g, r, omega, t_lo, t_hi, phase, method, dt, rtol, atol, max_steps):
-    # one kernel call for the constants, the run controls and the section times of a run
-    sp, rate, hmax = _run_constants(m, c, k, g, r, omega)
-    ctl = E.controls(t_hi, t_lo, hmax, rate, dt, rtol, atol, 0.0, max_steps, method,
-                     E.NO_TANGENT)
-    return sp, ctl, section_times(t_lo, t_hi, phase, 2.0 * math.pi / omega)
-
-
 def run_constants(p: Params):
     """(sp, rate, hmax) of one run; sweeps.py builds the same for many rows at once."""
     return _run_constants(p.m, p.c, p.k, p.g, p.r, p.omega)
@@ -151,15 +118,40 @@ def run_constants(p: Params):
 
 _NO_SAMPLES = np.empty(0)
 _STATUS = {int(s): s for s in RunStatus}
-_NO_LOGS = np.empty((0, 2))
+_MESSAGES = {int(s): RUN_MESSAGES[s] for s in RunStatus}
+_LIMITS = (int(RunStatus.IMPACT_LIMIT), int(RunStatus.STEP_LIMIT))
 
 
-def _built(cls, **fields):
+_new = object.__new__
+
+
+def _built(cls, fields):
     """An instance of the frozen dataclass ``cls`` from fields known to be complete and
     valid: one dict update instead of a frozen __init__'s setattr per field (a few µs of
     a simulate() call that takes tens)."""
-    obj = object.__new__(cls)
+    obj = _new(cls)
     obj.__dict__.update(fields)
+    return obj
+
+
+def _samples(t, x, v):
+    """:func:`_built` for Samples, its three stores written out (half the time of a dict
+    built and copied, on a path that builds two or three per call)."""
+    obj = _new(Samples)
+    d = obj.__dict__
+    d["t"] = t
+    d["x"] = x
+    d["v"] = v
+    return obj
+
+
+def _impacts(t, v, period):
+    """:func:`_samples` for Impacts; ``phase`` is computed from ``_period`` on first use."""
+    obj = _new(Impacts)
+    d = obj.__dict__
+    d["t"] = t
+    d["v"] = v
+    d["_period"] = period
     return obj
 
 
@@ -202,68 +194,48 @@ def simulate(p: Params, t_end: float = 500.0, x0: float | None = None, v0: float
     -------
     Solution
     """
-    t_end, t_record, x0, v0, phase, dt, rtol, atol = check_run(
-        p, t_end=t_end, t_record=t_record, x0=x0, v0=v0, phase=phase, method=method, dt=dt,
-        rtol=rtol, atol=atol, dense=dense, limits=limits)
+    plain = (check_plain_run(p, t_end, t_record, x0, v0, phase, dense, limits)
+             if method == "exact" else None)
+    if plain is None:
+        t_end, t_record, x0, v0, phase, dt, rtol, atol = check_run(
+            p, t_end=t_end, t_record=t_record, x0=x0, v0=v0, phase=phase, method=method,
+            dt=dt, rtol=rtol, atol=atol, dense=dense, limits=limits)
+    else:
+        t_end, t_record, x0, v0, phase = plain
     max_impacts = limits.max_impacts if max_impacts is None else int(max_impacts)
     max_steps = limits.max_steps if max_steps is None else int(max_steps)
-    sp, ctl, pc_t = _run_setup(p.m, p.c, p.k, p.g, p.r, p.omega, t_record, t_end, phase,
-                               METHOD_IDS[method], 0.0 if dt is None else dt, rtol, atol,
-                               max_steps)
-    res = np.empty(E.NRES)
-    period = 2.0 * math.pi / p.omega
+    if max_impacts < 0:
+        raise ValueError(f"invalid run: max_impacts={max_impacts!r} must be >= 0")
     if isinstance(dense, (int, np.integer)):
         d_t = np.linspace(t_record, t_end, dense) if dense else _NO_SAMPLES
     else:
         d_t = np.array(dense, dtype=float)
-    n_pc, n_d = pc_t.shape[0], d_t.shape[0]
-    n_periods = int((t_end - t_record) / period) + 2
-    cap = min(max(1024, 8 * n_periods), max_impacts)
-    while True:
-        # one buffer for all outputs: impacts (t, v), sticking intervals, samples (x, v)
-        buf = np.empty(2 * cap + 2 * (n_periods + 2) + 2 * (n_pc + n_d))
-        imp_t, imp_v = buf[:cap], buf[cap:2 * cap]
-        o = 2 * cap + 2 * (n_periods + 2)
-        stick = buf[2 * cap:o].reshape(n_periods + 2, 2)
-        samples = buf[o:]
-        samples[:] = np.nan
-        pc_x, pc_v = samples[:n_pc], samples[n_pc:2 * n_pc]
-        d_x, d_v = samples[2 * n_pc:2 * n_pc + n_d], samples[2 * n_pc + n_d:]
-        ctl[E.MAX_IMPACTS] = max_impacts
-        tic = time.perf_counter()
-        E.run_from_python(sp, ctl, float(t0), x0, v0, imp_t, imp_v, stick, pc_t, pc_x, pc_v,
-                          d_t, d_x, d_v, _NO_SAMPLES, _NO_LOGS, res)
-        elapsed = time.perf_counter() - tic
-        n_rec = int(res[E.N_REC])
-        # more impacts in the window than the arrays held: run again with room for all of
-        # them, also when a work limit ended the run (its partial results must be complete)
-        if n_rec > cap and cap < max_impacts:
-            cap = min(max_impacts, max(2 * cap, n_rec))
-            continue
-        break
-    out = res.tolist()          # Python numbers: one conversion, not one per field
-    status = _STATUS[int(out[E.STATUS])]
-    n_stick = int(out[E.N_STICK])
-    tf, xf, vf, stuck = out[E.T_F], out[E.X_F], out[E.V_F], out[E.STUCK] != 0.0
-    # the outputs are views of the one buffer (its size is bounded by the window)
-    n_keep = min(n_rec, cap)
-    it = imp_t[:n_keep]
-    impacts = _built(Impacts, t=it, v=imp_v[:n_keep], _period=period)
-    # samples are filled in time order: the kept ones are a prefix (a run stopped by a
-    # work limit, or a section time a rounding past t_end, leaves the rest unfilled)
-    k = n_pc - int(np.count_nonzero(np.isnan(pc_x)))
-    poincare = _built(Samples, t=pc_t[:k], x=pc_x[:k], v=pc_v[:k])
-    dense_out = None
-    if d_t is not _NO_SAMPLES:
-        k = n_d - int(np.count_nonzero(np.isnan(d_x)))
-        dense_out = _built(Samples, t=d_t[:k], x=d_x[:k], v=d_v[:k])
-    message = RUN_MESSAGES[status]
-    if status == RunStatus.IMPACT_LIMIT or status == RunStatus.STEP_LIMIT:
+    tic = time.perf_counter()
+    out, counts = entry.simulate_run(p.m, p.c, p.k, p.g, p.r, p.omega, float(t0), x0, v0,
+                                     t_record, t_end, phase, METHOD_IDS[method],
+                                     0.0 if dt is None else dt, rtol, atol,
+                                     float(max_impacts), max_steps, d_t)
+    elapsed = time.perf_counter() - tic
+    (st, n_keep, cap, n_stick, n_stuck_max, n_pc, k_pc, k_d, tf, xf, vf, stuck, n_tot, n_tail,
+     nsteps) = counts
+    # the outputs are views of the one array (its size is bounded by the window)
+    o_pc = 2 * (cap + n_stuck_max)
+    message = _MESSAGES[st]
+    if st in _LIMITS:
         message += f" (stopped at t = {tf:.6g})"
-    return _built(Solution, params=p, method=method, t_end=t_end, t_record=t_record, phase=phase,
-                  impacts=impacts, poincare=poincare, sticking=stick[:n_stick],
-                  dense=dense_out, status=status, message=message,
-                  final=(tf, xf, vf, stuck),
-                  n_impacts=int(out[E.N_TOT]), n_chatter=int(out[E.N_TAIL]),
-                  nsteps=int(out[E.NSTEPS]), elapsed=elapsed,
-                  options=_options(method, x0, v0, t0, dt, rtol, atol))
+    if d_t is _NO_SAMPLES:
+        dense_out = None
+    else:
+        o_d = o_pc + 3 * n_pc
+        n_d = d_t.shape[0]
+        dense_out = _samples(d_t[:k_d], out[o_d:o_d + k_d], out[o_d + n_d:o_d + n_d + k_d])
+    return _built(Solution, {
+        "params": p, "method": method, "t_end": t_end, "t_record": t_record, "phase": phase,
+        "impacts": _impacts(out[:n_keep], out[cap:cap + n_keep], 2.0 * math.pi / p.omega),
+        "poincare": _samples(out[o_pc:o_pc + k_pc], out[o_pc + n_pc:o_pc + n_pc + k_pc],
+                             out[o_pc + 2 * n_pc:o_pc + 2 * n_pc + k_pc]),
+        "sticking": out[2 * cap:2 * cap + 2 * n_stick].reshape(n_stick, 2),
+        "dense": dense_out, "status": _STATUS[st], "message": message,
+        "final": (tf, xf, vf, stuck), "n_impacts": n_tot, "n_chatter": n_tail,
+        "nsteps": nsteps, "elapsed": elapsed,
+        "options": _options(method, x0, v0, t0, dt, rtol, atol)})

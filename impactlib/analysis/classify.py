@@ -172,15 +172,22 @@ def classify(sol, rtol: float = PERIOD_RTOL, max_period: int = MAX_PERIOD) -> Mo
 def classify_measured(sol, rtol: float = PERIOD_RTOL, max_period: int = MAX_PERIOD):
     """(Motion, Lyapunov or None): :func:`classify` with the Lyapunov measurement it
     made (None where the maps decided alone), for callers that show the exponents."""
-    p = sol.params
     m, n = motion_class(np.ascontiguousarray(sol.poincare.x), np.ascontiguousarray(sol.poincare.v),
-                        np.ascontiguousarray(sol.impacts.t), sol.t_end, p.T, sol.n_chatter,
-                        rtol, max_period)
-    motion = describe(m, n)
+                        np.ascontiguousarray(sol.impacts.t), sol.t_end, sol.params.T,
+                        sol.n_chatter, rtol, max_period)
+    return judge_motion(describe(m, n), sol, max_period)
+
+
+def judge_motion(motion: Motion, sol, max_period: int = MAX_PERIOD):
+    """(Motion, Lyapunov or None): the verdict on ``motion``, the class the maps of
+    ``sol`` give, measured where they find no period.  ``sol`` is a Solution, or any
+    record of the same run with its params, method, t_record, t_end, final, n_impacts,
+    nsteps and (read without dissipation only) impacts: a sweep that ran it judges from
+    its own outputs instead of running it again."""
     if motion.kind != "chaotic":
         return motion, None
-    if no_dissipation(p) and grows_without_bound(sol.impacts.t, sol.impacts.v, sol.t_record,
-                                                 sol.t_end):
+    if no_dissipation(sol.params) and grows_without_bound(sol.impacts.t, sol.impacts.v,
+                                                          sol.t_record, sol.t_end):
         return Motion(math.nan, math.nan, "unbounded",
                       "unbounded (no dissipation): the impact speed grows every cycle"), None
     ly = measure_lyapunov(sol)

@@ -12,13 +12,15 @@ from __future__ import annotations
 import math
 import time
 import dataclasses
+from collections import namedtuple
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..kernels._jit import jit
-from ..analysis.classify import MAX_PERIOD, PERIOD_RTOL, Motion, classify, describe, motion_class
-from ..analysis.lyapunov import grows_without_bound
+from ..analysis.classify import (MAX_PERIOD, PERIOD_RTOL, Motion, classify, describe,
+                                 judge_motion, motion_class)
+from ..analysis.lyapunov import grows_without_bound, no_dissipation
 from ..kernels.events import step_caps
 from ..kernels.flight import G, OM, system_constants_rows
 from ..model import (PARAM_NAMES, MotionCode, Params, RunLimits, RunStatus, check_run,
@@ -28,7 +30,8 @@ from ..kernels.engine import METHOD_IDS, Buffers
 from ..parallel import executor as _executor
 from ..parallel import run_blocks, worker_count
 from ..progress import reporter, stopped
-from ..simulate import section_times, simulate
+from ..kernels.entry import section_times
+from ..simulate import simulate
 from ..io.result import SweepResult
 
 CAP_PER_VALUE = 4096        # impacts kept per value; more are counted, flagged in status
@@ -52,7 +55,8 @@ def rows_kernel(sps, method, x0s, v0s, t_end, t_record, hmaxs, rates, dt, rtol, 
     """Run each row of sps in turn from (x0s[i], v0s[i]) (see engine.run_engine); results into
     the out arrays.
 
-    classes[i] = (m, n) codes when classify; finals[i] = (t, x, v, stuck) at the end.
+    classes[i] = (m, n) codes when classify; finals[i] = (t, x, v, stuck, impacts in all,
+    steps) at the end.
     With warm, value i starts from value i-1's final state, at the time t0 in [0, T_i)
     where the forcing has the phase the previous run ended with.
     """
@@ -93,6 +97,8 @@ def rows_kernel(sps, method, x0s, v0s, t_end, t_record, hmaxs, rates, dt, rtol, 
         finals[i, 1] = res[E.X_F]
         finals[i, 2] = res[E.V_F]
         finals[i, 3] = res[E.STUCK]
+        finals[i, 4] = res[E.N_TOT]
+        finals[i, 5] = res[E.NSTEPS]
         if classify:
             nk = min(n_rec, out_t.shape[1])
             m, n = motion_class(pc_x, pc_v, out_t[i, :nk], t0 + t_end, period, n_tail,
@@ -195,15 +201,28 @@ _VERDICT_CODES = {
 }
 
 
-def judge_aperiodic(p, name_x, vx, name_y, vy, impacts, period, workers, **run_kw):
-    """classify() of a single run (settings ``run_kw``) for each cell of a regime map
+#: what classify's verdict reads of a run (judge_motion), from a sweep's outputs
+SweepRun = namedtuple("SweepRun", "params method t_end t_record final n_impacts nsteps")
+
+
+def judge_aperiodic(p, name_x, vx, name_y, vy, impacts, period, finals, workers, **run_kw):
+    """classify()'s verdict on the run (settings ``run_kw``) of each cell of a regime map
     whose points never repeated: whether it is chaotic is classify's call (one rule, the
-    Lyapunov criterion).  Updates the codes in place; returns {(iy, ix): Motion}."""
+    Lyapunov criterion), measured from where the sweep's run of the cell ended
+    (``finals``, rows_kernel's, one row per cell).  Updates the codes in place; returns
+    {(iy, ix): Motion}."""
     cells = np.argwhere((period == MotionCode.INFINITE) & (impacts != 0))
+    nx = vx.size
 
     def judge(iy, ix):
-        sol = simulate(p.replace(**{name_x: float(vx[ix]), name_y: float(vy[iy])}), **run_kw)
-        return classify(sol)
+        q = p.replace(**{name_x: float(vx[ix]), name_y: float(vy[iy])})
+        if no_dissipation(q):
+            # the growth check reads every impact of the window; the sweep kept a few
+            return classify(simulate(q, **run_kw))
+        t, x, v, stuck, n_tot, nsteps = finals[iy * nx + ix].tolist()
+        run = SweepRun(q, run_kw["method"], run_kw["t_end"], run_kw["t_record"],
+                       (t, x, v, stuck != 0.0), int(n_tot), int(nsteps))
+        return judge_motion(describe(int(impacts[iy, ix]), int(period[iy, ix])), run)[0]
 
     ex = _executor(workers)
     futs = [ex.submit(judge, iy, ix) for iy, ix in cells]
@@ -280,7 +299,7 @@ def _run_rows(sps, hmaxs, rates, method, x0s, v0, t_end, t_record, dt, rtol, ato
     out_v = np.empty((n, cap))
     counts = np.zeros(n, dtype=np.int64)
     status = np.zeros(n, dtype=np.int64)
-    finals = np.zeros((n, 4))
+    finals = np.zeros((n, 6))
     classes = np.zeros((n, 2), dtype=np.int64)
     v0s = np.ascontiguousarray(np.broadcast_to(np.asarray(v0, dtype=np.float64), (n,)))
     rows_kernel(sps, METHOD_IDS[method], np.ascontiguousarray(x0s, dtype=np.float64), v0s,
@@ -545,15 +564,17 @@ def regime_map(p: Params, name_x: str, values_x, name_y: str, values_y,
     impacts = np.zeros(ny * nx, dtype=np.int64)
     period = np.zeros_like(impacts)
     status = np.zeros_like(impacts)
+    finals = np.zeros((ny * nx, 6))
 
-    def collect(idx, out_t, out_v, counts, st, finals, classes):
+    def collect(idx, out_t, out_v, counts, st, fin, classes):
         impacts[idx], period[idx], status[idx] = classes[:, 0], classes[:, 1], st
+        finals[idx] = fin
 
     run_jobs(sps, hmaxs, rates, x0s, np.full(nx * ny, v0), method=method, t_end=t_end,
              t_record=t_record, dt=dt, rtol=rtol, atol=atol, classify=True, cap=512,
              max_impacts=max_impacts, max_steps=max_steps, on_block=collect, workers=workers)
     impacts, period, status = (a.reshape(ny, nx) for a in (impacts, period, status))
-    motions = judge_aperiodic(p, name_x, vx, name_y, vy, impacts, period, workers,
+    motions = judge_aperiodic(p, name_x, vx, name_y, vy, impacts, period, finals, workers,
                               t_end=t_end, t_record=t_record, method=method, x0=x0, v0=v0,
                               dt=dt, rtol=rtol, atol=atol, max_impacts=max_impacts,
                               max_steps=max_steps)

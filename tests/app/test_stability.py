@@ -325,15 +325,16 @@ def test_one_omega_move_is_one_simulation_and_at_most_one_lyapunov_run(make_expl
     engine); the readout's exponents are classify's own measurement (2.8123: not
     periodic), its one Lyapunov run."""
     from impactlib.analysis import lyapunov
-    from impactlib.kernels import engine
+    from impactlib.kernels import entry
     e = make_explorer()
     jobs = (e.scene_job, e.stability_job, e.window_job)
     for job in jobs:
         assert job.done.wait(60)
     runs, sims, lyap, windows = [], [], [], []
-    real_entry, real_sim, real_ly = engine.run_from_python, il.simulate, lyapunov.lyapunov_run
-    monkeypatch.setattr(engine, "run_from_python",
-                        lambda *a: runs.append(a[1][engine.T_RECORD]) or real_entry(*a))
+    real_entry, real_sim, real_ly = entry.simulate_run, il.simulate, lyapunov.lyapunov_run
+    # simulate_run(m, c, k, g, r, omega, t0, x0, v0, t_record, ...)
+    monkeypatch.setattr(entry, "simulate_run",
+                        lambda *a: runs.append(a[9]) or real_entry(*a))
     monkeypatch.setattr(il, "simulate", lambda *a, **k: sims.append(k) or real_sim(*a, **k))
     monkeypatch.setattr(lyapunov, "lyapunov_run", lambda *a, **k: lyap.append(a) or real_ly(*a, **k))
     real_show = e.displacement.show_window

@@ -80,6 +80,28 @@ def test_regime_map_agrees_with_classify_at_random_cells():
         assert rm.label(iy, ix) == il.classify(sol).label, (ws[ix], rs[iy])
 
 
+def test_regime_map_judges_every_aperiodic_cell_as_classify_does():
+    """Cells whose points never repeat are judged from the sweep's own run of the cell
+    (its final state and work): each verdict, Lyapunov exponent and error included, must
+    be classify()'s of the cell's single simulate() run.  Then a row without dissipation
+    (c = 0, r = 1), where the growth check needs every impact and the cell is run again."""
+    ws = np.linspace(3.0, 5.0, 24)
+    rs = np.linspace(0.3, 0.9, 6)
+    rm = il.regime_map(PAPER, "omega", ws, "r", rs, t_end=T_END, t_record=T_REC)
+    kinds = {mo.kind for mo in rm.motions.values()}
+    assert len(rm.motions) >= 10 and {"chaotic", "not settled", "undetermined"} <= kinds
+    for (iy, ix), mo in rm.motions.items():
+        sol = il.simulate(PAPER.replace(omega=ws[ix], r=rs[iy]), t_end=T_END, t_record=T_REC)
+        assert repr(mo) == repr(il.classify(sol)), (ws[ix], rs[iy])
+    p = PAPER.replace(c=0.0)
+    ws = np.linspace(0.5, 4.0, 12)
+    rm = il.regime_map(p, "omega", ws, "r", [1.0], t_end=200.0, t_record=100.0)
+    assert rm.motions
+    for (iy, ix), mo in rm.motions.items():
+        sol = il.simulate(p.replace(omega=ws[ix], r=1.0), t_end=200.0, t_record=100.0)
+        assert repr(mo) == repr(il.classify(sol)), ws[ix]
+
+
 @pytest.fixture(scope="module")
 def omega_pd():
     """Period doubling of the period-1 orbit at r = 0.6: a real multiplier through -1."""

@@ -3,9 +3,11 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import impactlib as il
-from impactlib.model import rk4_stability_limit
+from impactlib.model import RunLimits, check_run, rk4_stability_limit
 
 from core_helpers import PAPER
 
@@ -57,6 +59,65 @@ def test_bad_run_setting_names_the_field(kwargs, words):
     with pytest.raises(ValueError) as info:
         il.simulate(PAPER, **kwargs)
     assert words in str(info.value)
+
+
+def test_negative_impact_limit_is_a_clear_error():
+    with pytest.raises(ValueError, match=r"max_impacts=-1 must be >= 0"):
+        il.simulate(PAPER, max_impacts=-1)
+
+
+def _outcome(**kw):
+    try:
+        out = check_run(PAPER, method="exact", dt=None, rtol=1e-6, atol=1e-9, **kw)
+    except ValueError as e:
+        return str(e)
+    return out, [type(v) for v in out]
+
+
+_PI_UP = math.nextafter(math.pi, 4.0)
+#: a valid exact run, and values on and beyond every bound check_run draws for each setting
+_RUN = dict(t_end=500.0, t_record=250.0, x0=None, v0=0.0, phase=0.0, dense=0)
+_EDGES = {
+    "t_end": [1e-300, 0.0, -0.0, -1.0, 250.0, 1e9, math.inf, math.nan],
+    "t_record": [None, 0.0, -0.0, -1e-300, 500.0, 500.0000000000001, math.inf, math.nan],
+    "x0": [0.0, -0.0, -1e-300, 2.0, math.inf, -math.inf, math.nan],
+    "v0": [-3.0, 1e300, math.inf, -math.inf, math.nan],
+    "phase": [-0.0, -1e-300, math.pi, _PI_UP, math.inf, math.nan],
+    "dense": [-1, 1, 2, 3, 5_000_000],
+}
+_CHANGE = st.one_of(
+    st.sampled_from([(k, v) for k, vs in _EDGES.items() for v in vs]),
+    st.tuples(st.sampled_from(["t_end", "t_record", "x0", "v0", "phase"]),
+              st.floats(-10.0, 600.0)))
+
+
+def _quick_and_full(changes, max_samples):
+    kw = dict(_RUN, **dict(changes), limits=RunLimits(max_samples=max_samples))
+    full = {k: np.float64(v) if isinstance(v, float) else v for k, v in kw.items()}
+    return repr(_outcome(**kw)), repr(_outcome(**full))
+
+
+# each setting on and beyond its bounds, and the sample limit (4) reached and passed: a
+# window of length 0 holds 2 section times
+_CASES = ([[(k, v)] for k, vs in _EDGES.items() for v in vs]
+          + [[("t_record", 500.0), ("dense", d)] for d in (1, 2, 3)])
+
+
+@pytest.mark.parametrize("max_samples", [5_000_000, 4])
+@pytest.mark.parametrize("changes", _CASES, ids=lambda c: ",".join(f"{k}={v!r}" for k, v in c))
+def test_quick_checks_of_plain_floats_agree_with_the_full_checks(changes, max_samples):
+    """check_run answers an exact run given as Python floats in a few comparisons; the same
+    values as numpy floats take every check: the answer (values and types, or the whole
+    message) must be the same."""
+    quick, full = _quick_and_full(changes, max_samples)
+    assert quick == full
+
+
+@settings(max_examples=300, deadline=None, derandomize=True)
+@given(changes=st.lists(_CHANGE, max_size=3), max_samples=st.sampled_from([5_000_000, 100, 4]))
+def test_quick_checks_agree_with_the_full_checks_for_any_settings(changes, max_samples):
+    quick, full = _quick_and_full(changes, max_samples)
+    assert quick == full
 
 
 def test_rk4_beyond_stability_limit_is_a_clear_error():
