@@ -168,9 +168,13 @@ def _solve_shifted(J, fx, fv):
     """dz with (J - I) dz = -F, by Cramer's rule (None when J - I is singular)."""
     a, b, c, d = J[0] - 1.0, J[1], J[2], J[3] - 1.0
     det = a * d - b * c
-    if det == 0.0 or not math.isfinite(det):
+    if det != 0.0 and math.isfinite(det):
+        return (-fx * d + fv * b) / det, (-fv * a + fx * c) / det
+    try:        # products beyond the float range (a strongly unstable orbit): LAPACK scales
+        dx, dv = np.linalg.solve(np.array([[a, b], [c, d]]), [-fx, -fv]).tolist()
+    except np.linalg.LinAlgError:
         return None
-    return (-fx * d + fv * b) / det, (-fv * a + fx * c) / det
+    return dx, dv
 
 
 def _newton(f, p, x0, v0):
@@ -214,9 +218,14 @@ def multipliers_of(J) -> np.ndarray:
     a, b, c, d = (float(e) for e in np.ravel(J))
     if not all(math.isfinite(e) for e in (a, b, c, d)):
         return np.array([complex(np.nan), complex(np.nan)])
+    if max(abs(a), abs(b), abs(c), abs(d)) > 1e150:
+        # squares would overflow: LAPACK balances the matrix first
+        mu = np.linalg.eigvals(np.array([[a, b], [c, d]])).astype(complex)
+        return mu[np.argsort(-np.abs(mu), kind="stable")]
     # lambda = (a + d) / 2 +- sqrt(((a - d) / 2)^2 + b c): no cancellation in the
     # discriminant from trace^2 / 4 - det; the smaller root from det / the larger
-    h, disc = 0.5 * (a + d), (0.5 * (a - d)) ** 2 + b * c
+    h, e = 0.5 * (a + d), 0.5 * (a - d)
+    disc = e * e + b * c        # a product, not **: huge entries give inf, not OverflowError
     if disc < 0.0:
         w = math.sqrt(-disc)
         return np.array([complex(h, w), complex(h, -w)])
