@@ -7,9 +7,16 @@ when impactlib is imported from a site-packages (or dist-packages) directory and
 ``$XDG_CACHE_HOME/impactlib/numba`` (default ``~/.cache/impactlib/numba``; on Windows
 ``%LOCALAPPDATA%\\impactlib\\numba``, on macOS ``~/Library/Caches/impactlib/numba``).
 A ``NUMBA_CACHE_DIR`` set by the user (or the Dockerfile) always wins.
+
+Numba checks a cached kernel against its own file only, not against the kernels it
+calls in other files, so an edited callee would run stale.  The cache is therefore tied
+to a hash of every jitted source of the package: installed, it lives in a subdirectory
+named by the hash; in a checkout, the cache files beside the sources are dropped when
+the hash differs from the one they were written under.
 """
 from __future__ import annotations
 
+import hashlib
 import os
 import sys
 from pathlib import Path
@@ -32,12 +39,50 @@ def user_cache_dir() -> Path:
     return base / "impactlib" / "numba"
 
 
+def sources_hash(package_dir: Path = PACKAGE_DIR) -> str:
+    """A hash of every module of the package that defines a jitted function."""
+    h = hashlib.sha1()
+    for path in sorted(package_dir.rglob("*.py")):
+        text = path.read_bytes()
+        if b"@jit" in text:
+            h.update(path.relative_to(package_dir).as_posix().encode() + b"\0" + text)
+    return h.hexdigest()[:16]
+
+
+def drop_stale(package_dir: Path = PACKAGE_DIR, digest: str | None = None) -> bool:
+    """In a checkout: remove the cache files beside the sources when they were written
+    under other sources (a missing stamp counts as other); True if it removed any."""
+    digest = digest or sources_hash(package_dir)
+    stamp = package_dir / "__pycache__" / "numba-sources.txt"
+    try:
+        if stamp.read_text() == digest:
+            return False
+    except OSError:
+        pass
+    dropped = False
+    for f in package_dir.rglob("__pycache__/*.nb[ic]"):
+        try:
+            f.unlink()
+            dropped = True
+        except OSError:          # another process removed it, or a read-only checkout
+            pass
+    try:
+        stamp.parent.mkdir(exist_ok=True)
+        stamp.write_text(digest)
+    except OSError:
+        pass
+    return dropped
+
+
 def configure() -> str | None:
     """Point Numba's cache at the user cache directory for an installed package (before
     any kernel is compiled); return the directory chosen, None when left to Numba."""
-    if os.environ.get("NUMBA_CACHE_DIR") or not installed():
+    if os.environ.get("NUMBA_CACHE_DIR"):
         return None
-    path = str(user_cache_dir())
+    if not installed():
+        drop_stale()
+        return None
+    path = str(user_cache_dir() / sources_hash())
     os.environ["NUMBA_CACHE_DIR"] = path
     config = sys.modules.get("numba.core.config")
     if config is not None:   # numba already imported: its config read the variable already
