@@ -194,6 +194,24 @@ def _lighter_init(self, **properties) -> None:
     self._initialized = True
 
 
+def _stable_default(self, obj):
+    themed = obj.__dict__.get("__themed_values__")
+    cls = type(obj)
+    if themed is None or self.name not in themed:
+        known = cls.__dict__.get("_ie_stable_defaults")
+        if known is None:
+            known = {}
+            cls._ie_stable_defaults = known
+        if self.name in known:
+            return known[self.name]
+        if self.name not in obj._property_values and \
+                self.name not in _unstable_default_names(cls):
+            # an immutable value (str, number, None, tuple): the same for every instance
+            known[self.name] = value = self.instance_default(obj)
+            return value
+    return _BOKEH_ORIGINALS["_get_default"](self, obj)
+
+
 def _themed_values(self):
     # upstream: getattr(self, "__themed_values__", None), an AttributeError raised
     # through HasProps.__getattr__ for every model without a theme, at every default read
@@ -223,6 +241,9 @@ def lighter_properties(on: bool = True) -> None:
     4. ``HasProps.themed_values()`` raised and caught an AttributeError (through
        ``HasProps.__getattr__``) for every model without a theme, on every read of a
        default: it reads the instance's dict.
+    5. ``PropertyDescriptor._get_default`` copies and validates the class's default on
+       every read of a property left at an immutable default (str, number, None,
+       tuple), thousands of times per page: kept per class, unless a theme sets it.
 
     tests/app/test_panel_fixes.py checks they give Bokeh's own results for every model
     of a session's page, and the same serialised page. ``on=False`` restores Bokeh's
@@ -236,17 +257,20 @@ def lighter_properties(on: bool = True) -> None:
             HasProps.query_properties_with_values
         _BOKEH_ORIGINALS["__init__"] = HasProps.__init__
         _BOKEH_ORIGINALS["themed_values"] = HasProps.themed_values
+        _BOKEH_ORIGINALS["_get_default"] = PropertyDescriptor._get_default
     if on:
         HasProps._overridden_defaults = classmethod(_cached_overridden_defaults)
         HasProps.query_properties_with_values = _selected_properties_with_values
         HasProps.__init__ = _lighter_init
         HasProps.themed_values = _themed_values
+        PropertyDescriptor._get_default = _stable_default
     else:
         HasProps._overridden_defaults = classmethod(_BOKEH_ORIGINALS["_overridden_defaults"])
         HasProps.query_properties_with_values = \
             _BOKEH_ORIGINALS["query_properties_with_values"]
         HasProps.__init__ = _BOKEH_ORIGINALS["__init__"]
         HasProps.themed_values = _BOKEH_ORIGINALS["themed_values"]
+        PropertyDescriptor._get_default = _BOKEH_ORIGINALS["_get_default"]
 
 
 # -- reconnecting to the same session (BokehJS 3.9.2) -------------------------------------
