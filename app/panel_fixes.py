@@ -198,6 +198,9 @@ def _stable_default(self, obj):
     themed = obj.__dict__.get("__themed_values__")
     cls = type(obj)
     if themed is None or self.name not in themed:
+        made = obj._unstable_default_values            # this instance's, made once
+        if self.name in made:
+            return made[self.name]
         known = cls.__dict__.get("_ie_stable_defaults")
         if known is None:
             known = {}
@@ -243,7 +246,8 @@ def lighter_properties(on: bool = True) -> None:
        default: it reads the instance's dict.
     5. ``PropertyDescriptor._get_default`` copies and validates the class's default on
        every read of a property left at an immutable default (str, number, None,
-       tuple), thousands of times per page: kept per class, unless a theme sets it.
+       tuple), thousands of times per page: kept per class, unless a theme sets it;
+       a default made per instance (a list, a model) is looked up first.
 
     tests/app/test_panel_fixes.py checks they give Bokeh's own results for every model
     of a session's page, and the same serialised page. ``on=False`` restores Bokeh's
