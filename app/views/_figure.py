@@ -66,10 +66,10 @@ class Kit:
 
 def make_figure(name: str, title: str, x_label, y_label, *, kit: Kit,
                 tools: str = POINTS_TOOLS, toolbar_location="right", x_range=None,
-                y_range=None, y_axis_type="linear", grid: bool = True, height=None):
-    """A figure that fills its cell of the page grid (the page sizes the cells; ``height``
-    is the height of an older layout and not used). Its toolbar sits inside the frame and
-    shows while the pointer is on the figure, so it takes no room from the data.
+                y_range=None, y_axis_type="linear", grid: bool = True):
+    """A figure that fills its cell of the page grid (the page sizes the cells). Its
+    toolbar sits inside the frame and shows while the pointer is on the figure, so it
+    takes no room from the data.
 
     Built as ``bokeh.plotting.figure(...)`` builds it, but with the ``kit``'s shared
     models given at construction (figure() makes its own ranges, scales, axes' tickers,

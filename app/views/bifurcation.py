@@ -56,7 +56,7 @@ class BifurcationView(View):
         self.title = "Bifurcation diagram"
         self.figure = make_figure("bifurcation_figure", "Bifurcation diagram",
                                   AXIS_LABELS["omega"], "impact velocity ẋ(τᵢ−)",
-                                  x_range=Range1d(0.1, 5.0), height=340,
+                                  x_range=Range1d(0.1, 5.0),
                                   tools=DIAGRAM_TOOLS, kit=kit)
         self._common = dict(x="omega", y="v", size=2, alpha=0.55)
         self.renderers = [add_glyph(self.figure, Scatter, self.source, color=WALL,
