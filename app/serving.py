@@ -84,13 +84,16 @@ def quiet_rejected_values() -> None:
 
 
 def skip_diagnostics() -> None:
-    """Bokeh's ``perform_error_diagnostics`` setting off: Bokeh then does not inspect the
-    signature of every callback Panel registers with ``on_change`` (about 5 % of a new
-    session's CPU, bench/bench_sessions.py) nor look for close matches to a misspelt
-    attribute (the error is raised all the same). The app's callbacks are fixed code,
-    checked by the tests; Bokeh's documentation names the setting as a speed-up."""
+    """Bokeh's development checks off in the served process, two settings Bokeh's
+    documentation names as speed-ups: ``perform_document_validation`` (every model of a
+    new session's document checked for layout and data mistakes: about 8 % of a served
+    session's CPU, profiled) and ``perform_error_diagnostics`` (the signature of every
+    callback Panel registers inspected, and close matches looked for when an attribute
+    is misspelt, which is raised all the same: about 5 % in process). The pages are
+    fixed code: tests/app/test_figure_kit.py validates each mode's document."""
     from bokeh.settings import settings
 
+    settings.perform_document_validation.set_value(False)
     settings.perform_error_diagnostics.set_value(False)
 
 
