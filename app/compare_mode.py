@@ -11,7 +11,6 @@ import logging
 from . import compute, diagram, state
 from .jobs import Job
 from .scenes import BY_KEY
-from .views._figure import share_helpers
 from .views.compare import DIAGRAMS, SECTIONS, CompareView
 
 log = logging.getLogger(__name__)
@@ -30,7 +29,6 @@ class CompareMode:
         """The view; the first call builds it and starts its ten panels."""
         if self.view is None:
             self.view = CompareView()
-            share_helpers(self.view.figures)
             self.view.present(presenter)
             runs = {k: state.validate({**state.defaults(), **BY_KEY[k].settings()})
                     for k in (*DIAGRAMS, *SECTIONS)}

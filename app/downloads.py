@@ -68,8 +68,19 @@ class Downloads:
 
     def __init__(self, session):
         self.session = session
+        self._widgets = None
+
+    @property
+    def widgets(self) -> list:
+        """The buttons, made when first asked for (the drawer's card: a page that never
+        opens it never builds them)."""
+        if self._widgets is None:
+            self._widgets = self._make()
+        return self._widgets
+
+    def _make(self) -> list:
         button = dict(color="default", sizing_mode="stretch_width")
-        self.widgets = [
+        return [
             pn.widgets.FileDownload(callback=self.impacts_csv, filename="impacts.csv",
                                     label="Impacts (CSV)", **button),
             pn.widgets.FileDownload(callback=self.poincare_csv, filename="poincare.csv",

@@ -40,7 +40,7 @@ from .research_panel import ResearchPanel
 from .session_diagram import SessionDiagram
 from .settings import BY_NAME, QUERY_NAMES, SWEEP_RANGES, Settings
 from .views import VIEWS
-from .views._figure import fit_titles, share_helpers
+from .views._figure import Kit, fit_titles
 
 log = logging.getLogger(__name__)
 
@@ -72,7 +72,7 @@ class Explorer(pn.viewable.Viewer):
         dispatch = self._loop = loop if loop is not None else SessionLoop(doc)
         background = doc is not None or loop is not None     # jobs in the pools
         self._loaded = doc is None        # served: the diagram starts once the page is up
-        self.views = [cls() for cls in VIEWS]
+        self.views = [cls(kit) for kit in [Kit()] for cls in VIEWS]
         for view in self.views:
             setattr(self, view.key, view)
             view.request = self.request
@@ -85,7 +85,6 @@ class Explorer(pn.viewable.Viewer):
         if doc is not None:
             repair_reconnect(doc)
             fit_titles(doc)
-        share_helpers([v.figure for v in self.views if v.figure is not None])
         self.downloads = Downloads(self)
         rooms = {"compare": lambda: c.compare_room(
                      self.compare.open(self.settings.presenter).figures),

@@ -9,6 +9,12 @@ another one; re-check each workaround against the new version before moving the 
 from __future__ import annotations
 
 import panel as pn
+from bokeh.core.has_props import HasProps as _HasProps, Intrinsic as _Intrinsic, \
+    Undefined as _Undefined
+from bokeh.core.property.descriptors import DataSpecPropertyDescriptor, PropertyDescriptor
+
+#: The descriptors whose ``__set__`` is ``PropertyDescriptor.__set__``.
+_PLAIN_DESCRIPTORS = (PropertyDescriptor, DataSpecPropertyDescriptor)
 
 #: The Panel release these workarounds were written for and checked against.
 PANEL_VERSION = "1.9.4"
@@ -153,13 +159,75 @@ def _selected_properties_with_values(self, query, *, include_defaults=True,
     return result
 
 
+def _unstable_default_names(cls) -> tuple:
+    """Names of the properties of ``cls`` whose default is made per instance (a model,
+    a list), in Bokeh's order: what ``HasProps.__init__`` fills in for each new model
+    (upstream asks every property each time; the answer depends on the class only)."""
+    found = cls.__dict__.get("_ie_unstable_defaults")
+    if found is None:
+        found = tuple(name for name in cls.properties(_with_props=True)
+                      if cls.lookup(name).has_unstable_default(cls))
+        cls._ie_unstable_defaults = found
+    return found
+
+
+def _lighter_init(self, **properties) -> None:
+    super(_HasProps, self).__init__()
+    self._property_values = {}
+    self._unstable_default_values = {}
+    self._unstable_themed_values = {}
+    unstable = _unstable_default_names(type(self))
+    for name, value in properties.items():
+        if value is _Undefined or value is _Intrinsic:
+            continue
+        descriptor = self.lookup(name, raises=False)
+        if (isinstance(value, _HasProps) and type(descriptor) in _PLAIN_DESCRIPTORS
+                and name in unstable):
+            # upstream first makes the default (a new model) to compare the value with
+            # (a model passed in is never equal to it), then drops it
+            descriptor._set_value(self, descriptor.property.prepare_value(self, name, value))
+        else:
+            setattr(self, name, value)
+    for name in unstable:
+        if name not in properties:
+            self.lookup(name)._get(self)     # fills in ``_unstable_*_values``
+    self._initialized = True
+
+
+def _stable_default(self, obj):
+    themed = obj.__dict__.get("__themed_values__")
+    cls = type(obj)
+    if themed is None or self.name not in themed:
+        made = obj._unstable_default_values            # this instance's, made once
+        if self.name in made:
+            return made[self.name]
+        known = cls.__dict__.get("_ie_stable_defaults")
+        if known is None:
+            known = {}
+            cls._ie_stable_defaults = known
+        if self.name in known:
+            return known[self.name]
+        if self.name not in obj._property_values and \
+                self.name not in _unstable_default_names(cls):
+            # an immutable value (str, number, None, tuple): the same for every instance
+            known[self.name] = value = self.instance_default(obj)
+            return value
+    return _BOKEH_ORIGINALS["_get_default"](self, obj)
+
+
+def _themed_values(self):
+    # upstream: getattr(self, "__themed_values__", None), an AttributeError raised
+    # through HasProps.__getattr__ for every model without a theme, at every default read
+    return self.__dict__.get("__themed_values__")
+
+
 _BOKEH_ORIGINALS: dict = {}
 
 
 def lighter_properties(on: bool = True) -> None:
-    """Two shortcuts in Bokeh 3.9.2's property machinery, which takes most of a new
+    """Shortcuts in Bokeh 3.9.2's property machinery, which takes most of a new
     session's server CPU (bench/bench_sessions.py --profile; --compare-fixes measures
-    them). Same values, computed once:
+    them). Same values, computed once or not at all:
 
     1. ``HasProps._overridden_defaults()`` walks the class's MRO and merges every
        ``__overridden_defaults__`` on each call, about 50 times per model built or
@@ -167,10 +235,23 @@ def lighter_properties(on: bool = True) -> None:
     2. ``HasProps.query_properties_with_values(include_defaults=False)`` (what the
        document's serialisation calls) reads the default value of every property of the
        model, then drops those not set: it reads only the ones it keeps.
+    3. ``HasProps.__init__`` sets each keyword through the property's setter, which
+       first makes the old value: a model given its ticker, range or view made a
+       default one first and dropped it (a page made about 420 models to keep 180).
+       A model passed for a property whose default is made per instance is stored
+       without that; and which properties have such defaults is asked once per class,
+       not of every property of every new model.
+    4. ``HasProps.themed_values()`` raised and caught an AttributeError (through
+       ``HasProps.__getattr__``) for every model without a theme, on every read of a
+       default: it reads the instance's dict.
+    5. ``PropertyDescriptor._get_default`` copies and validates the class's default on
+       every read of a property left at an immutable default (str, number, None,
+       tuple), thousands of times per page: kept per class, unless a theme sets it;
+       a default made per instance (a list, a model) is looked up first.
 
-    tests/app/test_panel_fixes.py checks both give Bokeh's own results for every model
-    of a session's page. ``on=False`` restores Bokeh's functions (for measuring).
-    Idempotent, per process.
+    tests/app/test_panel_fixes.py checks they give Bokeh's own results for every model
+    of a session's page, and the same serialised page. ``on=False`` restores Bokeh's
+    functions (for measuring). Idempotent, per process.
     """
     from bokeh.core.has_props import HasProps
 
@@ -178,13 +259,22 @@ def lighter_properties(on: bool = True) -> None:
         _BOKEH_ORIGINALS["_overridden_defaults"] = HasProps._overridden_defaults.__func__
         _BOKEH_ORIGINALS["query_properties_with_values"] = \
             HasProps.query_properties_with_values
+        _BOKEH_ORIGINALS["__init__"] = HasProps.__init__
+        _BOKEH_ORIGINALS["themed_values"] = HasProps.themed_values
+        _BOKEH_ORIGINALS["_get_default"] = PropertyDescriptor._get_default
     if on:
         HasProps._overridden_defaults = classmethod(_cached_overridden_defaults)
         HasProps.query_properties_with_values = _selected_properties_with_values
+        HasProps.__init__ = _lighter_init
+        HasProps.themed_values = _themed_values
+        PropertyDescriptor._get_default = _stable_default
     else:
         HasProps._overridden_defaults = classmethod(_BOKEH_ORIGINALS["_overridden_defaults"])
         HasProps.query_properties_with_values = \
             _BOKEH_ORIGINALS["query_properties_with_values"]
+        HasProps.__init__ = _BOKEH_ORIGINALS["__init__"]
+        HasProps.themed_values = _BOKEH_ORIGINALS["themed_values"]
+        PropertyDescriptor._get_default = _BOKEH_ORIGINALS["_get_default"]
 
 
 # -- reconnecting to the same session (BokehJS 3.9.2) -------------------------------------

@@ -73,13 +73,13 @@ class ResearchPanel:
         """Make both views and the tabs (first opening only)."""
         from .views.basins import BasinsView
         from .views.regime_map import RegimeMapView
-        from .views._figure import share_helpers
+        from .views._figure import Kit
         from .views.boundaries import BoundaryOverlay
-        self.views = {MAP: RegimeMapView(), BASINS: BasinsView()}
+        kit = Kit()
+        self.views = {MAP: RegimeMapView(kit), BASINS: BasinsView(kit)}
         self.overlay = BoundaryOverlay(self.views[MAP], self._pick)
         self.boundary_status = NamedHTML("", model_name="boundaries_status",
                                          css_classes=["ie-boundaries-status"])
-        share_helpers([v.figure for v in self.views.values()])
         for view in self.views.values():      # on a tablet or phone the room scrolls
             view.figure.min_height = 360
         for view in self.views.values():

@@ -83,10 +83,26 @@ def quiet_rejected_values() -> None:
     pn.config.exception_handler = _one_line_exception
 
 
+def skip_diagnostics() -> None:
+    """Bokeh's development checks off in the served process, two settings Bokeh's
+    documentation names as speed-ups: ``perform_document_validation`` (every model of a
+    new session's document checked for layout and data mistakes: about 8 % of a served
+    session's CPU, profiled) and ``perform_error_diagnostics`` (the signature of every
+    callback Panel registers inspected, and close matches looked for when an attribute
+    is misspelt, which is raised all the same: about 5 % in process). The pages are
+    fixed code: tests/app/test_figure_kit.py validates each mode's document."""
+    from bokeh.settings import settings
+
+    settings.perform_document_validation.set_value(False)
+    settings.perform_error_diagnostics.set_value(False)
+
+
 def install() -> None:
-    """Everything a served process needs once: quiet logs and the Panel workarounds."""
+    """Everything a served process needs once: quiet logs, the Panel workarounds, and
+    Bokeh without its development diagnostics."""
     quiet_closed_sockets()
     quiet_rejected_values()
     deliver_stranded_writes()
     tolerate_lost_by_keep_alive()
     lighter_properties()
+    skip_diagnostics()

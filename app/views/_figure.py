@@ -3,12 +3,12 @@ from __future__ import annotations
 
 import weakref
 
-from bokeh.models import (AllIndices, AllLabels, BasicTicker, BasicTickFormatter, DataRange1d,
-                          GlyphRenderer, Grid, LinearScale, PanTool, ResetTool, Selection,
-                          UnionRenderers, WheelZoomTool)
+from bokeh.models import (AllIndices, AllLabels, BasicTicker, BasicTickFormatter, CDSView,
+                          DataRange1d, GlyphRenderer, Grid, LinearAxis, LinearScale, Selection,
+                          Title, Tool, Toolbar, UnionRenderers)
 from bokeh.plotting import figure
 
-#: Tool sets by kind of view (each tool is a model, box zoom four; ``share_helpers``
+#: Tool sets by kind of view (each tool is a model, box zoom four; a ``Kit``
 #: gives the page one of each pan, wheel zoom and reset tool). Box zoom only where a
 #: region is worth picking out: the diagram.
 TIME_SERIES_TOOLS = "xpan,xwheel_zoom,reset"
@@ -30,24 +30,107 @@ LINE_SCALE, SIZE_SCALE = 2.0, 1.6
 _BASE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
-def make_figure(name: str, title: str, x_label: str, y_label: str, **kw):
+class Kit:
+    """The helper models a session's figures share, one instance of each per document
+    (models cannot be shared between documents): scales, tick placement and labels, the
+    horizontal grid lines, the sources' selection and its policy (no view selects), the
+    "all rows" filter, and the stateless navigation tools (BokehJS makes a tool's view
+    per plot; a shared tool only shares its on/off state). Every axis, grid and renderer
+    would otherwise get its own instance of each: about 50 models of a page."""
+
+    #: Tools shared by the figures of a kit (by name, as in a figure's ``tools``).
+    SHARED_TOOLS = frozenset({"pan", "xpan", "wheel_zoom", "xwheel_zoom", "reset"})
+
+    def __init__(self):
+        self.ticker, self.formatter, self.labels = BasicTicker(), BasicTickFormatter(), AllLabels()
+        self.policy, self.rows, self.scale = UnionRenderers(), AllIndices(), LinearScale()
+        self.selection = Selection()
+        # a Grid that names no axis reads its ticks from its ticker and its range from
+        # each plot
+        self.grid = Grid(dimension=1, ticker=self.ticker)
+        self._tools: dict = {}
+
+    def tool(self, name: str):
+        """The tool ``name`` (an alias of Bokeh's: "xpan", "box_zoom"...), shared when
+        it holds no state of its own."""
+        if name not in self.SHARED_TOOLS:
+            return Tool.from_string(name)
+        if name not in self._tools:
+            self._tools[name] = Tool.from_string(name)
+        return self._tools[name]
+
+    def axis(self, label) -> LinearAxis:
+        return LinearAxis(axis_label=label, ticker=self.ticker, formatter=self.formatter,
+                          major_label_policy=self.labels, axis_label_text_font_style="normal")
+
+
+def make_figure(name: str, title: str, x_label, y_label, *, kit: Kit,
+                tools: str = POINTS_TOOLS, toolbar_location="right", x_range=None,
+                y_range=None, y_axis_type="linear", grid: bool = True):
     """A figure that fills its cell of the page grid (the page sizes the cells). Its
     toolbar sits inside the frame and shows while the pointer is on the figure, so it
-    takes no room from the data."""
-    kw.pop("height", None)
-    fig = figure(name=name, title=title, x_axis_label=x_label, y_axis_label=y_label,
-                 sizing_mode="stretch_both", min_width=120, min_height=80,
-                 tools=kw.pop("tools", POINTS_TOOLS),
-                 toolbar_location=kw.pop("toolbar_location", "right"), toolbar_inner=True,
-                 output_backend="canvas", **kw)
-    for axis in (fig.xaxis, fig.yaxis):
-        axis.axis_label_text_font_style = "normal"
-    fig.toolbar.logo = None
-    fig.toolbar.autohide = True
-    # horizontal grid lines only: the vertical ones are a model each and read little
-    fig.center = [c for c in fig.center if not (isinstance(c, Grid) and c.dimension == 0)]
+    takes no room from the data.
+
+    Built as ``bokeh.plotting.figure(...)`` builds it, but with the ``kit``'s shared
+    models given at construction (figure() makes its own ranges, scales, axes' tickers,
+    grids and tools first): draw into it with ``add_glyph``. Horizontal grid lines only
+    (``grid``): the vertical ones are a model each and read little."""
+    toolbar = Toolbar(tools=[kit.tool(t) for t in tools.split(",") if t], logo=None,
+                      autohide=True)
+    has_y = y_axis_type is not None
+    fig = figure.__new__(figure)
+    # Plot's constructor, not figure's: figure() would add axes, grids and tools of its own
+    super(figure, fig).__init__(
+        name=name, title=Title(text=title), sizing_mode="stretch_both", min_width=120,
+        min_height=80, toolbar=toolbar, toolbar_location=toolbar_location,
+        toolbar_inner=True, output_backend="canvas",
+        x_range=x_range if x_range is not None else DataRange1d(),
+        y_range=y_range if y_range is not None else DataRange1d(),
+        x_scale=kit.scale, y_scale=kit.scale, below=[kit.axis(x_label)],
+        left=[kit.axis(y_label)] if has_y else [], center=[kit.grid] if grid and has_y else [])
+    fig._ie_kit = kit
     style(fig, presenter=False)
     return fig
+
+
+#: Colours a glyph gets where none is given (bokeh.plotting's glyph methods: the
+#: palette's first colour; hatch and text black) and alpha where none is given.
+_DEFAULT_VISUALS = {"color": "#1f77b4", "alpha": 1.0}
+_BLACK = {"hatch_color": "black", "text_color": "black"}
+
+
+def add_glyph(fig, glyph_class, source, *, name=None, level=None, **props) -> GlyphRenderer:
+    """Draw ``glyph_class`` from ``source`` into ``fig`` (made by ``make_figure``) as
+    ``fig.<glyph>(...)`` draws it, with the same visual cascade (``color`` and ``alpha``
+    stand for each of the glyph's line, fill, hatch and text colours and alphas), but
+    with no glyph for non-selected or muted rows (no view selects or mutes) and the
+    figure kit's filter, selection and policy."""
+    kit = fig._ie_kit
+    names = glyph_class.properties()
+    given = {t: props.pop(t) for t in ("color", "alpha") if t in props}
+    for prop in names:
+        feature, _, trait = prop.partition("_")
+        if (feature not in ("line", "fill", "hatch", "text", "global") or not trait
+                or prop in props):
+            continue
+        if trait in given and trait not in names:
+            props[prop] = given[trait]
+        elif prop in _BLACK:
+            props[prop] = _BLACK[prop]
+        elif trait in _DEFAULT_VISUALS:
+            props[prop] = _DEFAULT_VISUALS[trait]
+    if source.selected is not kit.selection:
+        source.selection_policy = kit.policy
+        # (``selected`` is read-only once built; set_from_json is how BokehJS sets it)
+        source.set_from_json("selected", kit.selection)
+    extra = {"name": name} if name is not None else {}
+    if level is not None:
+        extra["level"] = level
+    renderer = GlyphRenderer(glyph=glyph_class(**props), data_source=source,
+                             view=CDSView(filter=kit.rows), nonselection_glyph=None,
+                             muted_glyph=None, **extra)
+    fig.renderers.append(renderer)
+    return renderer
 
 
 #: Runs in the page: a figure title wider than its frame (a long diagram title in large
@@ -200,58 +283,3 @@ def padded(values, include=(), min_span: float = 0.1, pad: float = 0.06):
 def set_range(rng, lo: float, hi: float) -> None:
     """Move a Range1d and make the reset tool return there."""
     rng.update(start=lo, end=hi, reset_start=lo, reset_end=hi)
-
-
-def share_helpers(figures) -> None:
-    """Fewer models per page: every axis, grid and renderer of a figure gets its own
-    instance of a few helper models that hold no state (scales, tick placement and
-    labels, the selection policy, the "all rows" filter), and every renderer a glyph for
-    non-selected and muted rows that no view uses (no selection tools, no legend).
-    Share one instance of each among the session's figures and drop the unused glyphs
-    (about 50 models of a page), and one horizontal grid among the figures. The same goes for the sources' selection (no view
-    selects: no tap or box-select tool) and for the pan, wheel zoom and reset tools
-    (BokehJS makes a tool's view per plot; a shared tool only shares its on/off state).
-    Models cannot be shared between documents, so this runs once per session."""
-    ticker, formatter, labels = BasicTicker(), BasicTickFormatter(), AllLabels()
-    policy, rows, scale, selection = UnionRenderers(), AllIndices(), LinearScale(), Selection()
-    tools: dict = {}
-    grid_lines: dict = {}
-    for fig in figures:
-        fig.toolbar.tools = [_shared_tool(tools, t) for t in fig.toolbar.tools]
-        # BokehJS clones a figure's scale models before setting their ranges
-        if type(fig.x_scale) is LinearScale and type(fig.y_scale) is LinearScale:
-            fig.x_scale = fig.y_scale = scale
-        for axis in fig.xaxis + fig.yaxis:
-            if type(axis.ticker) is BasicTicker:
-                axis.ticker = ticker
-            if type(axis.formatter) is BasicTickFormatter:
-                axis.formatter = formatter
-            axis.major_label_policy = labels
-        # the horizontal grid lines: one Grid placed by the shared ticker (a Grid that
-        # names no axis reads its ticks from its ticker and its range from each plot)
-        fig.center = [grid if not _plain_grid(grid) else
-                      grid_lines.setdefault("y", Grid(dimension=1, ticker=ticker))
-                      for grid in fig.center]   # (fig.ygrid and fig.select walk the graph)
-        for r in (r for r in fig.renderers if isinstance(r, GlyphRenderer)):
-            r.nonselection_glyph = None
-            r.muted_glyph = None
-            r.data_source.selection_policy = policy
-            # (``selected`` is read-only once built; set_from_json is how BokehJS sets it)
-            r.data_source.set_from_json("selected", selection)
-            r.view.filter = rows
-
-
-def _plain_grid(grid) -> bool:
-    """A horizontal grid as ``make_figure`` leaves it: on a y axis with the basic ticker,
-    styled as Bokeh's default."""
-    return (isinstance(grid, Grid) and grid.dimension == 1 and grid.axis is not None
-            and type(grid.axis.ticker) is BasicTicker
-            and set(grid.properties_with_values(include_defaults=False)) <= {"dimension", "axis", "ticker"})
-
-
-def _shared_tool(shared: dict, tool):
-    """One instance of each stateless navigation tool (by type and dimensions)."""
-    if type(tool) not in (PanTool, WheelZoomTool, ResetTool):
-        return tool
-    key = (type(tool), getattr(tool, "dimensions", None))
-    return shared.setdefault(key, tool)

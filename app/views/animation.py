@@ -13,11 +13,11 @@ from __future__ import annotations
 
 import numpy as np
 from bokeh.layouts import column, row
-from bokeh.models import (Button, ColumnDataSource, CustomJS, HoverTool, Label, Range1d,
-                          Select, Slider)
+from bokeh.models import (Button, ColumnDataSource, CustomJS, HoverTool, Label, MultiLine,
+                          Quad, Range1d, Select, Slider)
 
 from ..compute import SceneData
-from ._figure import IMPACT, LINE, STICK, WALL, make_figure, style
+from ._figure import IMPACT, LINE, STICK, WALL, Kit, add_glyph, make_figure, style
 from .base import View
 
 #: Frames per second of the animation.
@@ -170,7 +170,7 @@ class AnimationView(View):
             "cos ωτ, the wall flashes at each impact, the mass turns yellow while it "
             "rests on the wall.")
 
-    def __init__(self):
+    def __init__(self, kit: Kit):
         self.info = ColumnDataSource({c: [] for c in INFO})
         self.mass = _local(x=[], v=[], t=[], left=[], right=[], bottom=[], top=[])
         self.lines = _local(xs=[], ys=[], color=[], width=[])
@@ -179,13 +179,13 @@ class AnimationView(View):
                                         "", x_range=Range1d(-1.0, 1.0, syncable=False),
                                         y_axis_type=None,
                                         y_range=Range1d(-1.0, 0.75, syncable=False),
-                                        tools="")
+                                        tools="", kit=kit)
         fig.toolbar_location = None
-        fig.multi_line("xs", "ys", source=self.lines, line_color="color", line_width="width",
-                       name="animation_lines")
-        body = fig.quad(left="left", right="right", bottom="bottom", top="top",
-                        source=self.mass, fill_color=LINE, line_color="#0b2f57",
-                        line_width=2, name="animation_mass")
+        add_glyph(fig, MultiLine, self.lines, xs="xs", ys="ys", line_color="color",
+                  line_width="width", name="animation_lines")
+        body = add_glyph(fig, Quad, self.mass, left="left", right="right", bottom="bottom",
+                         top="top", fill_color=LINE, line_color="#0b2f57", line_width=2,
+                         name="animation_mass")
         body.glyph.syncable = False
         self.label = Label(x=8, y=8, x_units="screen", y_units="screen", text="",
                            text_font_size="14px", syncable=False)

@@ -6,10 +6,10 @@ from __future__ import annotations
 
 import numpy as np
 from bokeh.events import Tap
-from bokeh.models import ColumnDataSource, LinearColorMapper, Range1d, Span
+from bokeh.models import ColumnDataSource, Image, LinearColorMapper, Range1d, Scatter, Span
 
 from ..research import BASIN_COLOURS, UNDECIDED, BasinsRequest, attractor_text
-from ._figure import WALL, make_figure
+from ._figure import WALL, Kit, add_glyph, make_figure
 from .base import View
 from .regime_map import PENDING, cell_value, legend_html
 
@@ -20,7 +20,7 @@ PALETTE = (UNDECIDED,) + tuple(BASIN_COLOURS[i % len(BASIN_COLOURS)] for i in ra
 class BasinsView(View):
     key = "basins"
 
-    def __init__(self):
+    def __init__(self, kit: Kit):
         self.source = ColumnDataSource({"image": [np.full((1, 1), np.nan, np.float32)],
                                         "x": [0.0], "y": [0.0], "dw": [1.0], "dh": [1.0]})
         self.points = ColumnDataSource({"x": [], "v": []})
@@ -36,19 +36,19 @@ class BasinsView(View):
         self.figure = make_figure("basins_figure", "Basins of attraction",
                                   "initial position x₀", "initial velocity v₀",
                                   x_range=Range1d(0.0, 1.0), y_range=Range1d(-1.0, 1.0),
-                                  height=420)
+                                  kit=kit)
         mapper = LinearColorMapper(palette=list(PALETTE), low=-0.5, high=len(PALETTE) - 0.5,
                                    nan_color=PENDING)
-        self.figure.image(image="image", x="x", y="y", dw="dw", dh="dh", source=self.source,
-                          color_mapper=mapper, name="basins")
+        add_glyph(self.figure, Image, self.source, image="image", x="x", y="y", dw="dw",
+                  dh="dh", color_mapper=mapper, name="basins")
         self.wall = Span(location=0.0, dimension="height", line_color=WALL, line_width=2,
                          name="basins_wall")
         self.figure.add_layout(self.wall)
-        self.figure.scatter("x", "v", source=self.points, size=5, color="black",
-                            name="basins_attractors", level="overlay")
-        self.figure.scatter("x", "v", source=self.start, marker="circle_cross", size=14,
-                            fill_color="white", fill_alpha=0.6, line_color="black",
-                            line_width=2, name="basins_start", level="overlay")
+        add_glyph(self.figure, Scatter, self.points, x="x", y="v", size=5, color="black",
+                  name="basins_attractors", level="overlay")
+        add_glyph(self.figure, Scatter, self.start, x="x", y="v", marker="circle_cross",
+                  size=14, fill_color="white", fill_alpha=0.6, line_color="black",
+                  line_width=2, name="basins_start", level="overlay")
         self.figure.on_event(Tap, self._on_tap)
 
     def connect(self, pick) -> None:

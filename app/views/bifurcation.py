@@ -10,13 +10,14 @@ import math
 
 import numpy as np
 from bokeh.events import Tap
-from bokeh.models import ColumnDataSource, HoverTool, Legend, LegendItem, Range1d, Span
+from bokeh.models import (ColumnDataSource, HoverTool, Legend, LegendItem, Range1d, Scatter,
+                          Span)
 
 from ..compute import last
 from ..diagram import COLUMNS
 from ..settings import AXIS_LABELS, SYMBOLS
 from ..state import Run
-from ._figure import DIAGRAM_TOOLS, IMPACT, WALL, make_figure
+from ._figure import DIAGRAM_TOOLS, IMPACT, WALL, Kit, add_glyph, make_figure
 from .base import View
 
 #: Impacts of the current scene drawn on the marker.
@@ -41,7 +42,7 @@ def tap_value(x: float, lo: float, hi: float, n: int) -> float:
 class BifurcationView(View):
     key = "bifurcation"
 
-    def __init__(self):
+    def __init__(self, kit: Kit):
         self.source = ColumnDataSource(_empty())
         self.up_source = ColumnDataSource(_empty())
         self.down_source = ColumnDataSource(_empty())
@@ -55,11 +56,11 @@ class BifurcationView(View):
         self.title = "Bifurcation diagram"
         self.figure = make_figure("bifurcation_figure", "Bifurcation diagram",
                                   AXIS_LABELS["omega"], "impact velocity ẋ(τᵢ−)",
-                                  x_range=Range1d(0.1, 5.0), height=340,
-                                  tools=DIAGRAM_TOOLS)
+                                  x_range=Range1d(0.1, 5.0),
+                                  tools=DIAGRAM_TOOLS, kit=kit)
         self._common = dict(x="omega", y="v", size=2, alpha=0.55)
-        self.renderers = [self.figure.scatter(source=self.source, color=WALL,
-                                              name="bifurcation", **self._common)]
+        self.renderers = [add_glyph(self.figure, Scatter, self.source, color=WALL,
+                                    name="bifurcation", **self._common)]
         self.legend = None
         self.hover = HoverTool(renderers=list(self.renderers),
                                tooltips=self._tooltips("omega"))
@@ -68,8 +69,8 @@ class BifurcationView(View):
                            line_width=2, line_alpha=0.7, name="bifurcation_marker",
                            level="overlay")
         self.figure.add_layout(self.marker)
-        self.figure.scatter("omega", "v", source=self.current, size=5, color=IMPACT,
-                            name="bifurcation_current", level="overlay")
+        add_glyph(self.figure, Scatter, self.current, x="omega", y="v", size=5, color=IMPACT,
+                  name="bifurcation_current", level="overlay")
         self.figure.on_event(Tap, self._on_tap)
 
     def _add_continuation(self) -> None:
@@ -77,15 +78,10 @@ class BifurcationView(View):
         (about 13 Bokeh models a page that never sweeps up or down does without)."""
         if self.legend is not None:
             return
-        up = self.figure.scatter(source=self.up_source, color=UP, name="bifurcation_up",
-                                 **self._common)
-        down = self.figure.scatter(source=self.down_source, color=DOWN,
-                                   name="bifurcation_down", **self._common)
-        for r in (up, down):        # as share_helpers left the first renderer
-            r.nonselection_glyph = r.muted_glyph = None
-            first = self.renderers[0]
-            r.data_source.selection_policy = first.data_source.selection_policy
-            r.view.filter = first.view.filter
+        up = add_glyph(self.figure, Scatter, self.up_source, color=UP, name="bifurcation_up",
+                       **self._common)
+        down = add_glyph(self.figure, Scatter, self.down_source, color=DOWN,
+                         name="bifurcation_down", **self._common)
         self.renderers += [up, down]
         self.legend = Legend(items=[LegendItem(label="sweep up", renderers=[up]),
                                     LegendItem(label="sweep down", renderers=[down])],

@@ -7,10 +7,11 @@ from __future__ import annotations
 
 import html
 
-from bokeh.models import ColumnDataSource
+from bokeh.models import ColumnDataSource, MultiLine
 
 from ..boundaries import KINDS, BoundarySet
 from ..orbit_pick import pick_on_curve
+from ._figure import add_glyph
 
 RENDERERS = {"period-doubling": "boundary_pd", "saddle-node": "boundary_sn",
              "grazing": "boundary_grazing"}
@@ -29,9 +30,9 @@ class BoundaryOverlay:
         self.sources = {k: ColumnDataSource({"xs": [], "ys": []}) for k in KINDS}
         for kind in KINDS:
             colour, dash = STYLE[kind]
-            figure.multi_line("xs", "ys", source=self.sources[kind], line_color=colour,
-                              line_dash=dash, line_width=2.5, name=RENDERERS[kind],
-                              level="overlay")
+            add_glyph(figure, MultiLine, self.sources[kind], xs="xs", ys="ys",
+                      line_color=colour, line_dash=dash, line_width=2.5,
+                      name=RENDERERS[kind], level="overlay")
         self.status = ""
         self.curves: BoundarySet | None = None      # what is drawn
 

@@ -11,10 +11,11 @@ tap applies.
 from __future__ import annotations
 
 import numpy as np
-from bokeh.models import ColumnDataSource, LabelSet, Title
+from bokeh.models import ColumnDataSource, LabelSet, MultiLine, Scatter, Title
 
 from ..branches import SHORT
 from ..orbit_pick import pick_on_branch
+from ._figure import Kit, add_glyph
 from .base import View
 
 STABLE = "#1b7837"
@@ -73,8 +74,8 @@ def event_points(branches, x_span: float, y_span: float) -> dict:
 class BranchesView(View):
     key = "branches"
 
-    def __init__(self):
-        self.target = None
+    def __init__(self, kit: Kit):
+        self.target = None        # draws into the diagram's figure, with its kit
         self.stable = self.unstable = self.events = self.status = None
         self.renderers: list = []
         self.shown = None                 # the BranchSet drawn (None: none)
@@ -115,11 +116,11 @@ class BranchesView(View):
                             text_font_style="normal")
         f.add_layout(self.status, "below")
         self.renderers = [
-            f.multi_line("xs", "ys", source=self.stable, line_color=STABLE, line_width=2,
-                         name="branches_stable"),
-            f.multi_line("xs", "ys", source=self.unstable, line_color=UNSTABLE,
-                         line_width=1.5, line_dash="dashed", name="branches_unstable"),
-            f.scatter("x", "y", source=self.events, marker="diamond", size=8,
+            add_glyph(f, MultiLine, self.stable, xs="xs", ys="ys", line_color=STABLE,
+                      line_width=2, name="branches_stable"),
+            add_glyph(f, MultiLine, self.unstable, xs="xs", ys="ys", line_color=UNSTABLE,
+                      line_width=1.5, line_dash="dashed", name="branches_unstable"),
+            add_glyph(f, Scatter, self.events, x="x", y="y", marker="diamond", size=8,
                       fill_color=EVENT, line_color="#333333", name="branch_events"),
             labels, self.status]
 

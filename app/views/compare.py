@@ -10,10 +10,10 @@ it at once computes each panel once.
 from __future__ import annotations
 
 import numpy as np
-from bokeh.models import ColumnDataSource, Range1d
+from bokeh.models import ColumnDataSource, Range1d, Scatter
 
 from ..scenes import BY_KEY
-from ._figure import LINE, WALL, make_figure, style
+from ._figure import LINE, WALL, Kit, add_glyph, make_figure, style
 
 DIAGRAMS = tuple(f"fig3{c}" for c in "abcdef")
 SECTIONS = tuple(f"fig7{c}" for c in "abcd")
@@ -36,6 +36,7 @@ class CompareView:
     """Ten small figures: six diagrams and four sections, each set on shared ranges."""
 
     def __init__(self):
+        kit = Kit()
         base = BY_KEY[DIAGRAMS[0]].settings()
         omega = Range1d(base["bif_min"], base["bif_max"])
         v = Range1d(*V_RANGE)
@@ -44,8 +45,8 @@ class CompareView:
         for key in DIAGRAMS:
             src = ColumnDataSource({"omega": [], "v": []})
             fig = make_figure(f"compare_{key}", _panel_title(key), "ω", "ẋ(τᵢ−)",
-                              x_range=omega, y_range=v, tools="")
-            fig.scatter("omega", "v", source=src, size=1.5, color=WALL, alpha=0.6)
+                              x_range=omega, y_range=v, tools="", kit=kit)
+            add_glyph(fig, Scatter, src, x="omega", y="v", size=1.5, color=WALL, alpha=0.6)
             self.diagrams[key] = (src, fig)
             figs.append(fig)
         x, xv = Range1d(*SECTION_X), Range1d(*SECTION_V)
@@ -53,8 +54,8 @@ class CompareView:
         for key in SECTIONS:
             src = ColumnDataSource({"x": [], "v": []})
             fig = make_figure(f"compare_{key}", _panel_title(key), "x", "ẋ", x_range=x,
-                              y_range=xv, tools="")
-            fig.scatter("x", "v", source=src, size=2, color=LINE, alpha=0.7)
+                              y_range=xv, tools="", kit=kit)
+            add_glyph(fig, Scatter, src, x="x", y="v", size=2, color=LINE, alpha=0.7)
             self.sections[key] = (src, fig)
             figs.append(fig)
         for fig in figs:

@@ -8,11 +8,12 @@ from __future__ import annotations
 
 from bokeh.core.property.descriptors import UnsetValueError
 from bokeh.events import RangesUpdate
-from bokeh.models import ColumnDataSource, HoverTool, Range1d, Span
+from bokeh.models import (ColumnDataSource, HoverTool, Line, Range1d, Scatter, Span, VSpan,
+                          VStrip)
 
 from ..compute import SceneData, first_window
-from ._figure import (IMPACT, LINE, STICK, TIME_SERIES_TOOLS, WALL, auto_range_over,
-                      make_figure)
+from ._figure import (IMPACT, LINE, STICK, TIME_SERIES_TOOLS, WALL, Kit, add_glyph,
+                      auto_range_over, make_figure)
 from .base import View
 
 #: A scene started on a periodic orbit opens on its first periods (long enough to see
@@ -26,7 +27,7 @@ class DisplacementView(View):
             "line at g); yellow bands: the mass rests on the wall (sticking). Zoom out "
             "for the whole recorded window.")
 
-    def __init__(self):
+    def __init__(self, kit: Kit):
         #: The scene's dense samples (t, x, v) with exact impact corners; the animation
         #: plays from this source in the browser.
         self.source = ColumnDataSource({"t": [], "x": [], "v": []})
@@ -36,19 +37,20 @@ class DisplacementView(View):
         self.cursor = ColumnDataSource({"t": [0.0], "x": [0.0]}, syncable=False)
         self.figure = fig = make_figure("displacement_figure", "Displacement x(τ)",
                                         "time τ (s)", "displacement x",
-                                        x_range=Range1d(0.0, 1.0), tools=TIME_SERIES_TOOLS)
-        fig.vstrip(x0="start", x1="end", source=self.sticking, fill_color=STICK,
-                   fill_alpha=0.35, line_alpha=0, name="displacement_sticking",
-                   level="underlay")
+                                        x_range=Range1d(0.0, 1.0), tools=TIME_SERIES_TOOLS,
+                                        kit=kit)
+        add_glyph(fig, VStrip, self.sticking, x0="start", x1="end", fill_color=STICK,
+                  fill_alpha=0.35, line_alpha=0, name="displacement_sticking",
+                  level="underlay")
         self.wall = Span(location=0.0, dimension="width", line_color=WALL,
                          line_dash="dashed", line_width=1.5, name="displacement_wall")
         fig.add_layout(self.wall)
-        line = fig.line("t", "x", source=self.source, line_color=LINE, line_width=1.2,
-                        name="displacement")
-        dots = fig.scatter("t", "x", source=self.impacts, size=4, color=IMPACT,
-                           name="displacement_impacts")
+        line = add_glyph(fig, Line, self.source, x="t", y="x", line_color=LINE,
+                         line_width=1.2, name="displacement")
+        dots = add_glyph(fig, Scatter, self.impacts, x="t", y="x", size=4, color=IMPACT,
+                         name="displacement_impacts")
         # on the overlay layer: a frame of the animation repaints the cursor, not x(t)
-        fig.vspan(x="t", source=self.cursor, line_color="#2a9d8f", line_width=2,
+        add_glyph(fig, VSpan, self.cursor, x="t", line_color="#2a9d8f", line_width=2,
                   line_alpha=0.8, name="displacement_cursor", level="overlay")
         auto_range_over(fig, line, dots)
         fig.add_tools(HoverTool(renderers=[line], mode="vline", tooltips=[

@@ -1,10 +1,10 @@
 """View 3: impact map, impact phase τᵢ mod T against the velocity before impact."""
 from __future__ import annotations
 
-from bokeh.models import ColumnDataSource, HoverTool, Range1d
+from bokeh.models import ColumnDataSource, HoverTool, Range1d, Scatter
 
 from ..compute import SceneData
-from ._figure import IMPACT, make_figure, padded, set_range
+from ._figure import IMPACT, Kit, add_glyph, make_figure, padded, set_range
 from .base import View
 
 
@@ -13,14 +13,15 @@ class ImpactMapView(View):
     note = ("One dot per impact: when in the forcing period it happens (phase) and how "
             "fast the mass hits. One dot: one impact per period; a cloud: chaos.")
 
-    def __init__(self):
+    def __init__(self, kit: Kit):
         self.source = ColumnDataSource({"phase": [], "v": [], "t": []})
         self.pinned = None        # the overlay's source, made on the first pin
         self.figure = make_figure("impact_map_figure", "Impact map",
                                   "impact phase τᵢ mod T (s)", "impact velocity ẋ(τᵢ−)",
-                                  x_range=Range1d(0.0, 3.14159), y_range=Range1d(-1.0, 0.0))
-        dots = self.figure.scatter("phase", "v", source=self.source, size=5, color=IMPACT,
-                                   alpha=0.8, name="impact_map")
+                                  x_range=Range1d(0.0, 3.14159), y_range=Range1d(-1.0, 0.0),
+                                  kit=kit)
+        dots = add_glyph(self.figure, Scatter, self.source, x="phase", y="v", size=5,
+                         color=IMPACT, alpha=0.8, name="impact_map")
         self.figure.add_tools(HoverTool(renderers=[dots], tooltips=[
             ("τᵢ", "@t{0.000} s"), ("phase", "@phase{0.0000} s"),
             ("impact velocity", "@v{0.0000}")]))
@@ -31,8 +32,8 @@ class ImpactMapView(View):
             if not on:
                 return
             self.pinned = ColumnDataSource({"phase": [], "v": []})
-            r = self.figure.scatter("phase", "v", source=self.pinned, size=5,
-                                    color="#999999", alpha=0.35, name="impact_map_pinned")
+            r = add_glyph(self.figure, Scatter, self.pinned, x="phase", y="v", size=5,
+                          color="#999999", alpha=0.35, name="impact_map_pinned")
             self.figure.renderers = [r] + [x for x in self.figure.renderers if x is not r]
         self.pinned.data = ({"phase": self.source.data["phase"], "v": self.source.data["v"]}
                             if on else {"phase": [], "v": []})

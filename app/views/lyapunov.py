@@ -16,10 +16,10 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from bokeh.models import ColumnDataSource, FixedTicker, Grid, Range1d, Span
+from bokeh.models import ColumnDataSource, FixedTicker, Range1d, Scatter, Span
 
 from ..state import Run
-from ._figure import LINE, WALL, make_figure, padded, set_range
+from ._figure import LINE, WALL, Kit, add_glyph, make_figure, padded, set_range
 from .base import View
 from .bifurcation import DOWN, UP
 
@@ -90,7 +90,7 @@ class LyapunovView(View):
     key = "lyapunov"
     under = "bifurcation"
 
-    def __init__(self):
+    def __init__(self, kit: Kit):
         self.source = ColumnDataSource(_empty())
         self.values: list[np.ndarray] = []
         self.exponents: list[np.ndarray] = []
@@ -98,16 +98,15 @@ class LyapunovView(View):
         self.figure = make_figure("lyapunov_figure", "Largest Lyapunov exponent λ₁",
                                   None, "λ₁ (1/s)",
                                   y_range=Range1d(-MIN_SPAN, MIN_SPAN), tools="",
-                                  toolbar_location=None)
+                                  toolbar_location=None, grid=False, kit=kit)
         # the x axis is labelled on the diagram right above
         # few Bokeh models per page: no tools (the x axis is the diagram's, zoomed there)
         # and no grid lines (the zero line is the one that matters)
-        self.figure.center = [m for m in self.figure.center if not isinstance(m, Grid)]
         self.figure.yaxis.ticker = FixedTicker(ticks=strip_ticks(-MIN_SPAN, MIN_SPAN))
         self.figure.add_layout(Span(location=0.0, dimension="width", line_color=WALL,
                                     line_width=1, name="lyapunov_zero"))
-        self.figure.scatter("omega", "y", source=self.source, size="size", marker="marker",
-                            color="color", name="lyapunov")
+        add_glyph(self.figure, Scatter, self.source, x="omega", y="y", size="size",
+                  marker="marker", color="color", name="lyapunov")
 
     def present(self, presenter: bool) -> None:
         """The strip keeps a fixed height under the diagram; large type needs more."""

@@ -5,10 +5,10 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from bokeh.events import Tap
-from bokeh.models import ColumnDataSource, HoverTool, Span
+from bokeh.models import ColumnDataSource, HoverTool, Line, Scatter, Span
 
 from ..compute import SceneData
-from ._figure import CURVE_TOOLS, LINE, WALL, auto_range_over, make_figure
+from ._figure import CURVE_TOOLS, LINE, WALL, Kit, add_glyph, auto_range_over, make_figure
 from .base import View
 
 
@@ -30,19 +30,19 @@ class PhaseView(View):
             "dashed wall is an impact. Tap anywhere to start the motion from that "
             "(x, ẋ).")
 
-    def __init__(self):
+    def __init__(self, kit: Kit):
         self.source = ColumnDataSource({"x": [], "v": []})
         self.cursor = ColumnDataSource({"x": [0.0], "v": [0.0]}, syncable=False)
         self.figure = fig = make_figure("phase_figure", "Phase trajectory (x, ẋ)",
                                         "displacement x", "velocity ẋ",
-                                        tools=CURVE_TOOLS)
+                                        tools=CURVE_TOOLS, kit=kit)
         self.wall = Span(location=0.0, dimension="height", line_color=WALL,
                          line_dash="dashed", line_width=1.5, name="phase_wall")
         fig.add_layout(self.wall)
-        line = fig.line("x", "v", source=self.source, line_color=LINE, line_width=1.0,
-                        name="phase")
-        fig.scatter("x", "v", source=self.cursor, size=11, color="#2a9d8f",
-                    line_color="white", name="phase_cursor", level="overlay")
+        line = add_glyph(fig, Line, self.source, x="x", y="v", line_color=LINE,
+                         line_width=1.0, name="phase")
+        add_glyph(fig, Scatter, self.cursor, x="x", y="v", size=11, color="#2a9d8f",
+                  line_color="white", name="phase_cursor", level="overlay")
         auto_range_over(fig, line)
         fig.add_tools(HoverTool(renderers=[line], tooltips=[
             ("x", "@x{0.0000}"), ("ẋ", "@v{0.0000}")]))

@@ -2,10 +2,10 @@
 from __future__ import annotations
 
 from bokeh.events import Tap
-from bokeh.models import ColumnDataSource, HoverTool, Range1d
+from bokeh.models import ColumnDataSource, HoverTool, Range1d, Scatter
 
 from ..state import Run
-from ._figure import LINE, make_figure, padded, set_range
+from ._figure import LINE, Kit, add_glyph, make_figure, padded, set_range
 from .base import View
 from .phase import tap_to_state
 
@@ -16,14 +16,14 @@ class PoincareView(View):
             "period-1 motion; n points: period-n; a fractal cloud: chaos. Tap to start "
             "from a point.")
 
-    def __init__(self):
+    def __init__(self, kit: Kit):
         self.source = ColumnDataSource({"x": [], "v": [], "t": []})
         self.pinned = None        # the overlay's source, made on the first pin
         self.figure = make_figure("poincare_figure", "Poincaré map", "displacement x",
                                   "velocity ẋ", x_range=Range1d(-1.0, 1.0),
-                                  y_range=Range1d(-1.0, 1.0))
-        dots = self.figure.scatter("x", "v", source=self.source, size=5, color=LINE,
-                                   alpha=0.8, name="poincare")
+                                  y_range=Range1d(-1.0, 1.0), kit=kit)
+        dots = add_glyph(self.figure, Scatter, self.source, x="x", y="v", size=5,
+                         color=LINE, alpha=0.8, name="poincare")
         self.figure.add_tools(HoverTool(renderers=[dots], tooltips=[
             ("τ", "@t{0.000} s"), ("x", "@x{0.0000}"), ("ẋ", "@v{0.0000}")]))
         self._g = 0.0
@@ -35,8 +35,8 @@ class PoincareView(View):
             if not on:
                 return
             self.pinned = ColumnDataSource({"x": [], "v": []})
-            r = self.figure.scatter("x", "v", source=self.pinned, size=5,
-                                    color="#999999", alpha=0.35, name="poincare_pinned")
+            r = add_glyph(self.figure, Scatter, self.pinned, x="x", y="v", size=5,
+                          color="#999999", alpha=0.35, name="poincare_pinned")
             self.figure.renderers = [r] + [x for x in self.figure.renderers if x is not r]
         self.pinned.data = ({"x": self.source.data["x"], "v": self.source.data["v"]}
                             if on else {"x": [], "v": []})

@@ -8,11 +8,12 @@ import html
 
 import numpy as np
 from bokeh.events import Tap
-from bokeh.models import ColumnDataSource, HoverTool, LinearColorMapper, Range1d
+from bokeh.models import (ColumnDataSource, HoverTool, Image, LinearColorMapper, Range1d,
+                          Scatter)
 
 from ..research import PALETTE, MapRequest, MapRows
 from ..settings import AXIS_LABELS, SWEEP_RANGES, SYMBOLS
-from ._figure import make_figure
+from ._figure import Kit, add_glyph, make_figure
 from .base import View
 
 PENDING = "rgba(0, 0, 0, 0)"
@@ -40,7 +41,7 @@ def legend_html(items) -> str:
 class RegimeMapView(View):
     key = "regime_map"
 
-    def __init__(self):
+    def __init__(self, kit: Kit):
         self.source = ColumnDataSource({"image": [np.full((1, 1), np.nan, np.float32)],
                                         "x": [0.0], "y": [0.0], "dw": [1.0], "dh": [1.0]})
         self.current = ColumnDataSource({"x": [], "y": []})
@@ -58,14 +59,14 @@ class RegimeMapView(View):
         lo_y, hi_y = SWEEP_RANGES["r"]
         self.figure = make_figure("regime_map_figure", "Regime map", AXIS_LABELS["omega"],
                                   AXIS_LABELS["r"], x_range=Range1d(lo_x, hi_x),
-                                  y_range=Range1d(lo_y, hi_y), height=420)
+                                  y_range=Range1d(lo_y, hi_y), kit=kit)
         mapper = LinearColorMapper(palette=list(PALETTE), low=-0.5, high=len(PALETTE) - 0.5,
                                    nan_color=PENDING)
-        self.figure.image(image="image", x="x", y="y", dw="dw", dh="dh", source=self.source,
-                          color_mapper=mapper, name="regime_map")
-        self.figure.scatter("x", "y", source=self.current, marker="circle_cross", size=14,
-                            fill_color="white", fill_alpha=0.6, line_color="black",
-                            line_width=2, name="regime_map_current", level="overlay")
+        add_glyph(self.figure, Image, self.source, image="image", x="x", y="y", dw="dw",
+                  dh="dh", color_mapper=mapper, name="regime_map")
+        add_glyph(self.figure, Scatter, self.current, x="x", y="y", marker="circle_cross",
+                  size=14, fill_color="white", fill_alpha=0.6, line_color="black",
+                  line_width=2, name="regime_map_current", level="overlay")
         self.hover = HoverTool(tooltips=[("ω", "$x{0.000}"), ("r", "$y{0.000}")])
         self.figure.add_tools(self.hover)
         self.figure.on_event(Tap, self._on_tap)

@@ -137,3 +137,78 @@ def test_the_bokeh_parts_lighter_properties_replaces_are_as_written_for():
     query = inspect.getsource(HasProps.query_properties_with_values)
     assert query.index("descriptor.get_value(self)") < query.index("if key not in selected_keys")
     assert "for c in reversed(cls.__mro__)" in inspect.getsource(HasProps._overridden_defaults)
+    from bokeh.core.property.descriptors import PropertyDescriptor
+
+    init = inspect.getsource(HasProps.__init__)
+    assert "setattr(self, name, value)" in init and "desc.has_unstable_default(self)" in init
+    assert "old = self._get(obj)" in inspect.getsource(PropertyDescriptor.__set__)
+    assert "getattr(self, '__themed_values__', None)" in inspect.getsource(HasProps.themed_values)
+
+
+def _page_json(on: bool) -> str:
+    """A session's whole page at the defaults, serialised as for the browser's pull,
+    built with ``lighter_properties(on)``; ids, Panel's numbered names and object
+    addresses (which count what was made, not what was kept) replaced by their order."""
+    import json
+    import re
+
+    from bokeh.document import Document
+
+    from app.explorer import Explorer
+
+    panel_fixes.lighter_properties(on)
+    try:
+        e = Explorer(args={})
+        doc = Document()
+        doc.add_root(pn.panel(e).get_root(doc))
+        assert e.diagram.job.done.wait(120)
+        text = json.dumps(doc.to_json(), sort_keys=True, default=str)
+        e.release_links()
+    finally:
+        panel_fixes.lighter_properties(False)
+    text = re.sub(r"<memory at 0x[0-9a-f]+>", "buffer", text)
+    text = re.sub(r"\b1[0-9]{14}\b", "address", text)
+    text = re.sub(r"([A-Za-z]+)\d{5}(?=['\"])", r"\1N", text)
+    ids: dict = {}
+    return re.sub(r"(?<=['\"])p\d+(?=['\"])",
+                  lambda m: ids.setdefault(m.group(0), f"id{len(ids)}"), text)
+
+
+def test_lighter_properties_build_the_same_page_as_bokeh():
+    """Models built without their throwaway defaults, and themes read without the
+    exception: the page the browser pulls is Bokeh's own, model for model and value for
+    value (the shortcuts fail this if they dropped a default Bokeh keeps or stored a
+    value Bokeh does not)."""
+    _page_json(False)                    # caches warm, so both pages hold the same data
+    theirs, ours = _page_json(False), _page_json(True)
+    assert ours.count("'id': ") == theirs.count("'id': ") > 150
+    assert ours == theirs
+
+
+def test_lighter_properties_make_no_throwaway_models():
+    """The upstream waste itself: an axis given its ticker made a default ticker first."""
+    from bokeh.model import Model
+    from bokeh.models import BasicTicker, LinearAxis
+
+    made = []
+    original = Model.__init__
+
+    def counting(self, *a, **kw):
+        made.append(type(self).__name__)
+        original(self, *a, **kw)
+
+    ticker = BasicTicker()
+    Model.__init__ = counting
+    try:
+        for on in (False, True):
+            panel_fixes.lighter_properties(on)
+            made.clear()
+            axis = LinearAxis(ticker=ticker)
+            assert axis.ticker is ticker
+            if on:
+                assert made == ["LinearAxis", "BasicTickFormatter", "AllLabels"]
+            else:
+                assert made.count("BasicTicker") == 1     # made and dropped upstream
+    finally:
+        Model.__init__ = original
+        panel_fixes.lighter_properties(False)
