@@ -23,18 +23,8 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "bench"))
 
 import impactlib as il  # noqa: E402
-from bench_speed import OMEGAS, PAPER, T_END, T_RECORD, regime_grid  # noqa: E402
-
-
-def diagram_values():
-    """Per omega: kernel time, impacts in all, chatters summed in the window, evaluations."""
-    rows = []
-    for om in OMEGAS:
-        q = PAPER.replace(omega=float(om))
-        sols = [il.simulate(q, T_END, t_record=T_RECORD) for _ in range(7)]
-        s = sols[0]
-        rows.append((min(x.elapsed for x in sols), s.n_impacts, s.n_chatter, s.nsteps))
-    return np.array(rows)
+from bench_speed import (OMEGAS, PAPER, T_END, T_RECORD, diagram_values,  # noqa: E402
+                         regime_grid)
 
 
 def timed(fn, reps):
@@ -54,8 +44,7 @@ def main(argv=None):
     ap.add_argument("--reps", type=int, default=7, help="repeats of the 2-thread diagram")
     args = ap.parse_args(argv)
     il.simulate(PAPER, T_END, t_record=T_RECORD)
-    a = diagram_values()
-    cost, n_imp, n_ch, ev = a.T
+    _, cost, ev, n_imp, n_ch, _ = diagram_values(repeats=7).T
     chat = n_ch > 0
     tot = cost.sum()
     print(f"impactlib from {Path(il.__file__).parent}")

@@ -427,16 +427,22 @@ def bench_dask(cfg):
     return {"n": n, "cells": n * n, "dask": t_dask, "local": t_local, "identical": same}
 
 
-def profile_diagram():
-    """Per-omega kernel cost of the diagram (each value run alone through simulate)."""
+def diagram_values(repeats=3):
+    """Each diagram value run alone through simulate(), ``repeats`` times: per omega
+    (omega, best kernel time, steps, impacts in all, chatters summed, sticking intervals)."""
     rows = []
     for om in OMEGAS:
         q = PAPER.replace(omega=float(om))
-        sols = [il.simulate(q, T_END, t_record=T_RECORD) for _ in range(3)]
+        sols = [il.simulate(q, T_END, t_record=T_RECORD) for _ in range(repeats)]
         sol = sols[0]
         rows.append((om, min(x.elapsed for x in sols), sol.nsteps, sol.n_impacts,
                      sol.n_chatter, len(sol.sticking)))
-    a = np.array(rows)
+    return np.array(rows)
+
+
+def profile_diagram():
+    """Per-omega kernel cost of the diagram (each value run alone through simulate)."""
+    a = diagram_values()
     cost = a[:, 1]
     order = np.sort(cost)[::-1]
     tot = cost.sum()
