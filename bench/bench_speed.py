@@ -794,7 +794,7 @@ def report(m, cfg, r):
         f"The {prof['chatter_values']} values with complete chattering (chatter sequences summed "
         f"to their accumulation point) take {prof['chatter_share']:.0%} of the time: each "
         "sequence resolves its hops one by one until the error bound of summing the rest "
-        "is at rounding level (events.tail_bound). "
+        "is at rounding level (chatter.tail_bound). "
         f"Without them: {prof['evals_per_impact_nochatter']:.1f} evaluations per impact. "
         "Costliest values: "
         + "; ".join(f"omega={t['omega']:.3f}: {fmt_t(t['time'])}, {t['impacts']} impacts, "

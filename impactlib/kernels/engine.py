@@ -20,7 +20,8 @@ from collections import namedtuple
 import numpy as np
 
 from ._jit import jit
-from .events import IMPACT, NGRID, STEP_LIMIT, STICK, impact_outcome, next_impact_grid, search_grid
+from .chatter import STICK, impact_outcome
+from .events import IMPACT, NGRID, STEP_LIMIT, next_impact_grid, search_grid
 from .flight import G, R, T0, flight_state, release_time, start_segment
 from .integrators import advance_rk4, advance_rk45
 from ..model import RunStatus
@@ -116,7 +117,7 @@ def _record_impact(imp_t, imp_v, n_rec, t, vm, t_record):
 @jit
 def _next_report(t, t_end, pc_t, ip, d_t, idn, marks, im):
     """The next time after t the run reports a state (a sample, a mark or its end): a
-    chatter's tail is summed early only if it ends before (events.impact_outcome)."""
+    chatter's tail is summed early only if it ends before (chatter.impact_outcome)."""
     ts = t_end
     if ip < pc_t.shape[0] and pc_t[ip] > t:
         ts = min(ts, pc_t[ip])

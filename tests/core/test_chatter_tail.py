@@ -1,4 +1,4 @@
-"""The early summation of a chatter (events.tail_bound, tail_length, impact_outcome)
+"""The early summation of a chatter (chatter.tail_bound, tail_length, impact_outcome)
 against the mpmath reference, which steps through every hop until the rebound is below
 v_stop = 1e-16.
 
@@ -22,7 +22,7 @@ import pytest
 
 import impactlib as il
 from impactlib.kernels.engine import TAIL_TOL
-from impactlib.kernels.events import (FLY, STICK, impact_outcome, tail_bound, tail_floor_terms,
+from impactlib.kernels.chatter import (FLY, STICK, impact_outcome, tail_bound, tail_floor_terms,
                                       tail_length)
 from impactlib.kernels.flight import system_constants
 from impactlib.verify.report import CASE_BY_NAME, reference, steady_orbit
