@@ -85,6 +85,40 @@ def deliver_stranded_writes() -> None:
     pdoc._dispatch_msgs = dispatch_msgs
 
 
+# -- a page that left while an update was on its way (Panel 1.9.4) ----------------------
+
+def quiet_writes_to_a_left_page() -> None:
+    """Log an update that could not reach a page already gone at info, not warning.
+
+    Upstream (``panel.io.document._run_write_futures``): a write to a websocket the
+    browser closed (back, forward, reload or a closed tab while the server was sending)
+    logs "Failed sending message as connection was closed" as a warning, although the
+    page that would have shown the update is gone and nothing is lost. Other write
+    errors keep their warning. Idempotent, per process.
+    """
+    import logging
+
+    from panel.io import document as pdoc
+    from tornado.websocket import WebSocketClosedError
+
+    if getattr(pdoc._run_write_futures, "_impact_explorer", False):
+        return
+    log = logging.getLogger(pdoc.__name__)
+
+    async def run_write_futures(doc):
+        for future in pdoc._WRITE_FUTURES.pop(doc, []):
+            try:
+                await future
+            except WebSocketClosedError:
+                log.info("An update was not sent: its page had closed the connection")
+            except Exception as e:
+                log.warning(f"Failed sending message due to following error: {e}")
+
+    run_write_futures._impact_explorer = True
+    run_write_futures.__wrapped__ = pdoc._run_write_futures
+    pdoc._run_write_futures = run_write_futures
+
+
 # -- a socket lost twice (Bokeh 3.9.2) ----------------------------------------------------
 
 def tolerate_lost_by_keep_alive() -> None:

@@ -8,7 +8,7 @@ from tornado.iostream import StreamClosedError
 from tornado.websocket import WebSocketClosedError
 
 from .panel_fixes import (deliver_stranded_writes, lighter_properties,
-                          tolerate_lost_by_keep_alive)
+                          quiet_writes_to_a_left_page, tolerate_lost_by_keep_alive)
 
 log = logging.getLogger(__name__)
 
@@ -104,5 +104,6 @@ def install() -> None:
     quiet_rejected_values()
     deliver_stranded_writes()
     tolerate_lost_by_keep_alive()
+    quiet_writes_to_a_left_page()
     lighter_properties()
     skip_diagnostics()

@@ -29,6 +29,7 @@ def test_the_private_parts_the_workarounds_touch_exist():
     assert Syncable._debounce == 50                      # PromptFloatSlider's baseline
     for name in ("_dispatch_msgs", "_dispatch_write_task", "_WRITE_BLOCK", "_WRITE_MSGS"):
         assert hasattr(pdoc, name), name                 # deliver_stranded_writes
+    assert hasattr(pdoc, "_run_write_futures") and hasattr(pdoc, "_WRITE_FUTURES")
     assert hasattr(Callback, "registry")                 # release_links
     import panel as pn
     assert "scroll_button_threshold" in pn.Column.param      # GRID_COLUMN_CSS
@@ -79,6 +80,39 @@ def test_a_socket_the_keep_alive_let_go_closes_quietly():
     live, notified, lost = handler()
     WSHandler.on_close(live)
     assert notified == [1] and lost == [live.connection]
+
+
+def test_an_update_for_a_page_that_left_is_not_a_warning(caplog):
+    """Panel's own write loop, run on futures that fail as tornado's do when the browser
+    has closed the socket: upstream warns, the workaround logs at info; any other write
+    error still warns."""
+    import asyncio
+    import logging
+
+    from bokeh.document import Document
+    from panel.io import document as pdoc
+    from tornado.websocket import WebSocketClosedError
+
+    panel_fixes.quiet_writes_to_a_left_page()
+    upstream = pdoc._run_write_futures.__wrapped__
+
+    async def failing(exc):
+        raise exc
+
+    def run(write_loop, exc):
+        doc = Document()
+        caplog.clear()
+
+        async def main():
+            pdoc._WRITE_FUTURES[doc] = [asyncio.ensure_future(failing(exc))]
+            await write_loop(doc)
+        with caplog.at_level(logging.INFO, logger=pdoc.__name__):
+            asyncio.run(main())
+        return [r.levelno for r in caplog.records if r.name == pdoc.__name__]
+
+    assert run(upstream, WebSocketClosedError()) == [logging.WARNING]   # the upstream line
+    assert run(pdoc._run_write_futures, WebSocketClosedError()) == [logging.INFO]
+    assert run(pdoc._run_write_futures, OSError("disk")) == [logging.WARNING]
 
 
 def test_the_viewport_template_adds_the_tag_panels_page_lacks():
