@@ -11,7 +11,9 @@ from __future__ import annotations
 import panel as pn
 from bokeh.core.has_props import HasProps as _HasProps, Intrinsic as _Intrinsic, \
     Undefined as _Undefined
+from bokeh.core.property.wrappers import PropertyValueContainer as _PropertyValueContainer
 from bokeh.core.property.descriptors import DataSpecPropertyDescriptor, PropertyDescriptor
+import bokeh.model.util as _model_util
 
 #: The descriptors whose ``__set__`` is ``PropertyDescriptor.__set__``.
 _PLAIN_DESCRIPTORS = (PropertyDescriptor, DataSpecPropertyDescriptor)
@@ -205,6 +207,48 @@ def _unstable_default_names(cls) -> tuple:
     return found
 
 
+def _empty_container(prop) -> bool:
+    # (a default given as a function or a model is not looked into: made as upstream);
+    # a default Bokeh keeps unwrapped (a Seq's list) is sent with the page: made too
+    default = prop._default
+    return (type(default) in (list, dict, set) and not default
+            and isinstance(prop.wrap(type(default)()), _PropertyValueContainer))
+
+
+def _eager_default_names(cls) -> tuple:
+    """Of :func:`_unstable_default_names`, those whose default is not an empty list, dict
+    or set (a model, or a container that holds something): made when a model is built.
+    An empty container holds no reference and is left at its default until read."""
+    found = cls.__dict__.get("_ie_eager_defaults")
+    if found is None:
+        found = tuple(name for name in _unstable_default_names(cls)
+                      if not _empty_container(cls.lookup(name).property))
+        cls._ie_eager_defaults = found
+        cls._ie_lazy_defaults = frozenset(_unstable_default_names(cls)) - set(found)
+    return found
+
+
+def _lazy_default_names(cls) -> frozenset:
+    if "_ie_lazy_defaults" not in cls.__dict__:
+        _eager_default_names(cls)
+    return cls._ie_lazy_defaults
+
+
+def _visit_made_references(value, visitor) -> None:
+    # upstream reads every property that may hold a model, which makes each empty
+    # container default it has not made yet: such a default holds no reference
+    if isinstance(value, _HasProps):
+        lazy = _lazy_default_names(type(value))
+        made, unstable = value._property_values, value._unstable_default_values
+        themed = value.__dict__.get("__themed_values__") or ()
+        for attr in value.properties_with_refs():
+            if attr in lazy and attr not in made and attr not in unstable and attr not in themed:
+                continue
+            _model_util.visit_value_and_its_immediate_references(getattr(value, attr), visitor)
+    else:
+        _model_util.visit_value_and_its_immediate_references(value, visitor)
+
+
 def _lighter_init(self, **properties) -> None:
     super(_HasProps, self).__init__()
     self._property_values = {}
@@ -222,7 +266,7 @@ def _lighter_init(self, **properties) -> None:
             descriptor._set_value(self, descriptor.property.prepare_value(self, name, value))
         else:
             setattr(self, name, value)
-    for name in unstable:
+    for name in _eager_default_names(type(self)):
         if name not in properties:
             self.lookup(name)._get(self)     # fills in ``_unstable_*_values``
     self._initialized = True
@@ -283,6 +327,13 @@ def lighter_properties(on: bool = True) -> None:
        tuple), thousands of times per page: kept per class, unless a theme sets it;
        a default made per instance (a list, a model) is looked up first.
 
+    6. ``HasProps.__init__`` also makes every empty list, dict and set default of the new
+       model (its tags, callbacks, CSS classes, styles...: about ten per model, most
+       never set), and the walk that collects a document's models reads each of them:
+       they are made when first read, and the walk skips those not made (an empty
+       container refers to no model). A default that is a model, or a container holding
+       something, is still made with the model.
+
     tests/app/test_panel_fixes.py checks they give Bokeh's own results for every model
     of a session's page, and the same serialised page. ``on=False`` restores Bokeh's
     functions (for measuring). Idempotent, per process.
@@ -296,12 +347,15 @@ def lighter_properties(on: bool = True) -> None:
         _BOKEH_ORIGINALS["__init__"] = HasProps.__init__
         _BOKEH_ORIGINALS["themed_values"] = HasProps.themed_values
         _BOKEH_ORIGINALS["_get_default"] = PropertyDescriptor._get_default
+        _BOKEH_ORIGINALS["visit_immediate_value_references"] = \
+            _model_util.visit_immediate_value_references
     if on:
         HasProps._overridden_defaults = classmethod(_cached_overridden_defaults)
         HasProps.query_properties_with_values = _selected_properties_with_values
         HasProps.__init__ = _lighter_init
         HasProps.themed_values = _themed_values
         PropertyDescriptor._get_default = _stable_default
+        _model_util.visit_immediate_value_references = _visit_made_references
     else:
         HasProps._overridden_defaults = classmethod(_BOKEH_ORIGINALS["_overridden_defaults"])
         HasProps.query_properties_with_values = \
@@ -309,6 +363,8 @@ def lighter_properties(on: bool = True) -> None:
         HasProps.__init__ = _BOKEH_ORIGINALS["__init__"]
         HasProps.themed_values = _BOKEH_ORIGINALS["themed_values"]
         PropertyDescriptor._get_default = _BOKEH_ORIGINALS["_get_default"]
+        _model_util.visit_immediate_value_references = \
+            _BOKEH_ORIGINALS["visit_immediate_value_references"]
 
 
 # -- reconnecting to the same session (BokehJS 3.9.2) -------------------------------------

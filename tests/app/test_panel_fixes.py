@@ -177,6 +177,10 @@ def test_the_bokeh_parts_lighter_properties_replaces_are_as_written_for():
     assert "setattr(self, name, value)" in init and "desc.has_unstable_default(self)" in init
     assert "old = self._get(obj)" in inspect.getsource(PropertyDescriptor.__set__)
     assert "getattr(self, '__themed_values__', None)" in inspect.getsource(HasProps.themed_values)
+    from bokeh.model import util
+
+    visit = inspect.getsource(util.visit_immediate_value_references)
+    assert "for attr in value.properties_with_refs():" in visit and "getattr(value, attr)" in visit
 
 
 def _page_json(on: bool) -> str:
@@ -246,3 +250,29 @@ def test_lighter_properties_make_no_throwaway_models():
     finally:
         Model.__init__ = original
         panel_fixes.lighter_properties(False)
+
+
+def test_empty_container_defaults_are_made_when_read_not_with_the_model():
+    """Upstream makes every list, dict and set default of a new model, and its document
+    walk reads each one again; with the shortcut, a model on a page holds only those that
+    were set or read, and a default read later is still the same, stable object."""
+    from bokeh.document import Document
+    from bokeh.models import ColumnDataSource, GlyphRenderer, Scatter
+
+    for on in (False, True):
+        panel_fixes.lighter_properties(on)
+        try:
+            r = GlyphRenderer(glyph=Scatter(), data_source=ColumnDataSource())
+            doc = Document()
+            doc.add_root(r)
+            made = set(r._unstable_default_values)
+            assert ("view" in made) and (("tags" in made) is not on), made
+            tags = r.tags
+            assert r.tags is tags and tags == [] and "tags" in r._unstable_default_values
+            changes = []
+            doc.on_change(lambda event: changes.append(getattr(event, "attr", None)))
+            r.tags.append("x")                     # a change of a default made late is sent
+            assert r.tags == ["x"] and changes == ["tags"]
+            assert doc.get_model_by_id(r.view.id) is r.view
+        finally:
+            panel_fixes.lighter_properties(False)
