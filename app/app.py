@@ -27,4 +27,5 @@ def create_app() -> Explorer:
 
 
 if pn.state.served:
-    create_app().servable(title="Impact Explorer")
+    with serving.building():
+        create_app().servable(title="Impact Explorer")

@@ -183,7 +183,7 @@ def test_the_bokeh_parts_lighter_properties_replaces_are_as_written_for():
     assert "for attr in value.properties_with_refs():" in visit and "getattr(value, attr)" in visit
 
 
-def _page_json(on: bool) -> str:
+def _page_json(on: bool, validated: bool = True, args: dict | None = None) -> str:
     """A session's whole page at the defaults, serialised as for the browser's pull,
     built with ``lighter_properties(on)``; ids, Panel's numbered names and object
     addresses (which count what was made, not what was kept) replaced by their order."""
@@ -194,17 +194,24 @@ def _page_json(on: bool) -> str:
 
     from app.explorer import Explorer
 
+    from bokeh.core.property.validation import validate
+
+    from app import serving
+
     panel_fixes.lighter_properties(on)
     try:
-        e = Explorer(args={})
-        doc = Document()
-        doc.add_root(pn.panel(e).get_root(doc))
-        assert e.diagram.job.done.wait(120)
+        with (validate(True) if validated else serving.building()):
+            e = Explorer(args=args or {})
+            doc = Document()
+            doc.add_root(pn.panel(e).get_root(doc))
+        for job in (e.diagram.job, *e.compare.jobs, e.research.job, e.research.boundary_job):
+            assert job.done.wait(120), job.name
         text = json.dumps(doc.to_json(), sort_keys=True, default=str)
         e.release_links()
     finally:
         panel_fixes.lighter_properties(False)
     text = re.sub(r"<memory at 0x[0-9a-f]+>", "buffer", text)
+    text = re.sub(r"\bin \d+(\.\d+)? m?s\b", "in T", text)      # run times shown
     text = re.sub(r"\b1[0-9]{14}\b", "address", text)
     text = re.sub(r"([A-Za-z]+)\d{5}(?=['\"])", r"\1N", text)
     ids: dict = {}
@@ -221,6 +228,26 @@ def test_lighter_properties_build_the_same_page_as_bokeh():
     theirs, ours = _page_json(False), _page_json(True)
     assert ours.count("'id': ") == theirs.count("'id': ") > 150
     assert ours == theirs
+
+
+@pytest.mark.parametrize("link", ["", "scene=fig4&presenter=1&mode=compare",
+                                  "omega=2.62&mode=research&boundaries=1"])
+def test_a_session_built_without_property_validation_is_the_validated_page(link):
+    """app/app.py builds a served session inside ``serving.building()`` (Bokeh's
+    property validation off): the page must come out value for value as with validation
+    on (a value Bokeh would have converted on validation, or refused, differs here),
+    for each mode and presenter built from a link."""
+    from urllib.parse import parse_qsl
+
+    from bokeh.core.property.bases import validation_on
+
+    args = {k: [v.encode()] for k, v in parse_qsl(link)}
+    _page_json(True, args=args)
+    validated = _page_json(True, args=args)
+    built = _page_json(True, validated=False, args=args)
+    assert validation_on()                     # on again after the build
+    assert built.count("'id': ") == validated.count("'id': ") > 150
+    assert built == validated
 
 
 def test_lighter_properties_make_no_throwaway_models():
