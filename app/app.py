@@ -20,7 +20,9 @@ def create_app() -> Explorer:
     """A new, independent session: settings from the URL, its own views and workers."""
     # a dropped websocket reconnects to the same server session (kept for
     # --unused-session-lifetime): settings and views survive a Wi-Fi hiccup
-    pn.extension(notifications=False, reconnect=True)
+    # no BrowserInfo model: the app reads none of it, and a browser sends seven patches
+    # to fill it in on every new page
+    pn.extension(notifications=False, reconnect=True, browser_info=False)
     serving.install()
     panel_fixes.add_viewport_tag(pn.state.curdoc)
     return Explorer(args=pn.state.session_args)

@@ -288,12 +288,12 @@ def test_each_omega_step_repaints_the_scene(page, server):
     FIGURES["latency"] = samples
 
 
-#: Bokeh models a page may hold at the paper defaults (explore, the first page): 183
+#: Bokeh models a page may hold at the paper defaults (explore, the first page): 182
 #: measured with seven figures (the five views, the animation, the Lyapunov strip), the
 #: bar of ω, r, c, g, the header and the information line. The settings drawer, compare
 #: and research modes and the accuracy panel are built on use (tests/browser/test_modes.py
 #: counts each mode when opened).
-MODEL_BUDGET = 183
+MODEL_BUDGET = 182
 
 
 def test_page_bokeh_models_within_budget(page, server):
@@ -301,6 +301,8 @@ def test_page_bokeh_models_within_budget(page, server):
     open_app(page, server)
     n = page.evaluate("Bokeh.documents[0].all_models.size")
     assert n <= MODEL_BUDGET, n
+    # nothing of the browser's details is kept (each new page would send seven patches)
+    assert page.evaluate("Bokeh.documents[0].get_model_by_name('browser_info')") is None
 
 
 def test_server_log_has_no_traceback(server):
