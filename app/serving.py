@@ -7,8 +7,9 @@ import logging
 from tornado.iostream import StreamClosedError
 from tornado.websocket import WebSocketClosedError
 
-from .panel_fixes import (deliver_stranded_writes, lighter_properties,
-                          quiet_writes_to_a_left_page, tolerate_lost_by_keep_alive)
+from .bokeh_properties import lighter_properties
+from .panel_fixes import (deliver_stranded_writes, quiet_writes_to_a_left_page,
+                          tolerate_lost_by_keep_alive)
 
 log = logging.getLogger(__name__)
 
@@ -101,7 +102,7 @@ def building():
     """A context in which a new session's page is built without Bokeh's property
     validation (``bokeh.core.property.validation.validate``, Bokeh's documented speed-up
     for code that sets only valid values): about 7 % of a session's CPU in process. The
-    page is fixed code: tests/app/test_panel_fixes.py checks that it comes out the same
+    page is fixed code: tests/app/test_bokeh_properties.py checks that it comes out the same
     with validation on. Process-wide while it lasts, and a build runs on the server's
     event loop start to end, so nothing a user sends is applied inside it."""
     from bokeh.core.property.validation import validate

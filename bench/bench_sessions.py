@@ -12,7 +12,7 @@ threads, so the diagram worker's share is included); wall time is reported as we
                                              [--compare-fixes]
 
 The served process's workarounds (``app.serving.install``, including
-``panel_fixes.lighter_properties``) are installed as in a server; ``--compare-fixes``
+``bokeh_properties.lighter_properties``) are installed as in a server; ``--compare-fixes``
 also alternates sessions with Bokeh's property functions as shipped and reports both.
 
 Run it on a quiet machine; medians are reported. Without a server the scene is
@@ -97,7 +97,7 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     import panel as pn
 
-    from app import panel_fixes, serving
+    from app import bokeh_properties, serving
 
     pn.extension(notifications=False)
     serving.install()
@@ -121,7 +121,7 @@ def main(argv=None) -> int:
     res["phases_ms"] = phases
     if args.compare_fixes:
         res["fixes"] = compare_fixes(args.sessions)
-        panel_fixes.lighter_properties(True)
+        bokeh_properties.lighter_properties(True)
     if args.profile:
         res["profile_share"] = profile(args.sessions)
     if args.json:
@@ -131,13 +131,13 @@ def main(argv=None) -> int:
 
 def compare_fixes(n: int) -> dict:
     """CPU per session with Bokeh's property functions as shipped and with
-    ``panel_fixes.lighter_properties``, alternated (``n`` sessions each)."""
-    from app import panel_fixes
+    ``bokeh_properties.lighter_properties``, alternated (``n`` sessions each)."""
+    from app import bokeh_properties
 
     cpu = {"as shipped": [], "lighter_properties": []}
     for i in range(2 * n):
         name = list(cpu)[i % 2]
-        panel_fixes.lighter_properties(name != "as shipped")
+        bokeh_properties.lighter_properties(name != "as shipped")
         cpu[name].append(one_session()["cpu_ms"])
     med = {k: statistics.median(v) for k, v in cpu.items()}
     print(f"alternated, {n} sessions each: CPU median as shipped {med['as shipped']:.0f} ms, "
