@@ -3,7 +3,8 @@ directly, the document kept as plain data (rel_light_doc.py), no Bokeh models bu
 
 What one session does, as a browser tab does it (checked against Chromium's frames):
 GET the page (the server makes the session and renders the HTML; the session token is
-read from it; ``page=False`` instead makes a session id and token here, as Bokeh's
+read from it, cookies it sets, such as a proxy's route, go with the websocket;
+``page=False`` instead makes a session id and token here, as Bokeh's
 Python client does, and the server makes the session when the websocket opens), open
 ``ws://HOST/APP/ws`` with the token as subprotocol and the page's Origin, wait for the
 ACK, send PULL-DOC-REQ and keep the PATCH-DOCs that come before the reply (applied right
@@ -55,6 +56,7 @@ class LightSession:
         self.base = f"{u.scheme}://{u.netloc}"
         query = urllib.parse.urlencode(args or {})
         ws_path = u.path.rstrip("/") + "/ws"
+        self.cookies: dict[str, str] = {}
         if page:
             token = self._page_token(u.path + (f"?{query}" if query else ""), timeout)
         else:
@@ -65,8 +67,10 @@ class LightSession:
         self.document = doc = LightDocument()
         doc.send = self._send_patch
         doc.hooks.append(self._location_moved)
-        self.ws = WebSocket(self.host, self.port, ws_path, {
-            "Origin": self.origin, "Sec-WebSocket-Protocol": f"bokeh, {token}"}, timeout)
+        headers = {"Origin": self.origin, "Sec-WebSocket-Protocol": f"bokeh, {token}"}
+        if self.cookies:                    # e.g. a proxy's route (scripts/nginx.conf)
+            headers["Cookie"] = "; ".join(f"{k}={v}" for k, v in self.cookies.items())
+        self.ws = WebSocket(self.host, self.port, ws_path, headers, timeout)
         self.fragments: list = []
         try:
             self._open(time.monotonic() + timeout, browser)
@@ -80,6 +84,9 @@ class LightSession:
             conn.request("GET", path, headers={"Accept": "text/html"})
             resp = conn.getresponse()
             body = resp.read().decode(errors="replace")
+            for cookie in resp.headers.get_all("Set-Cookie") or []:
+                name, _, value = cookie.split(";", 1)[0].partition("=")
+                self.cookies[name.strip()] = value.strip()
         finally:
             conn.close()
         if resp.status != 200:

@@ -5,8 +5,8 @@ The comparison runs both clients on the same served page (the session-wide ``ser
 app): the same number of models pulled and in the end, the same model names, the same
 column lengths in the five views once both say complete, the same diagram status. The
 failures run against the served app (a foreign Origin) and against a small tornado
-websocket server on loopback that misbehaves on purpose (closes at once, says nothing,
-closes after the pull).
+server on loopback that misbehaves on purpose (closes at once, says nothing, closes
+after the pull) and records what the websocket upgrade carried (token, cookie, Origin).
 """
 from __future__ import annotations
 
@@ -109,10 +109,11 @@ class _Misbehaving(tornado.websocket.WebSocketHandler):
     def select_subprotocol(self, subprotocols):
         return subprotocols[0] if subprotocols else None
 
-    def initialize(self, mode):
-        self.mode, self.fragments = mode, []
+    def initialize(self, mode, seen):
+        self.mode, self.seen, self.fragments = mode, seen, []
 
     async def open(self):
+        self.seen.append(dict(self.request.headers))
         if self.mode == "close":
             self.close(1011, "going away")
         elif self.mode == "pull":
@@ -134,15 +135,27 @@ class _Misbehaving(tornado.websocket.WebSocketHandler):
             await self.write_message(json.dumps(part))
 
 
+class _Page(tornado.web.RequestHandler):
+    """A page that sets a route cookie (as scripts/nginx.conf does) and holds a token."""
+
+    def get(self):
+        self.set_header("Set-Cookie", "impact_route=r42; Path=/; HttpOnly")
+        self.write('<script>const render_items = [{"token":"tok-from-page","roots":{}}];'
+                   '</script>')
+
+
 @pytest.fixture
 def misbehaving():
-    """``start(mode)`` -> the URL of a page whose websocket misbehaves so."""
+    """``start(mode)`` -> (the URL of a page whose websocket misbehaves so, the list of
+    the websocket requests' headers)."""
     loop = asyncio.new_event_loop()
     servers = []
 
-    def start(mode: str) -> str:
+    def start(mode: str):
         sockets = tornado.netutil.bind_sockets(0, "127.0.0.1")
-        app = tornado.web.Application([(r"/app/ws", _Misbehaving, {"mode": mode})])
+        seen: list[dict] = []
+        app = tornado.web.Application([(r"/app", _Page),
+                                       (r"/app/ws", _Misbehaving, {"mode": mode, "seen": seen})])
 
         async def serve():
             server = tornado.httpserver.HTTPServer(app)
@@ -150,7 +163,7 @@ def misbehaving():
             return server
 
         servers.append(asyncio.run_coroutine_threadsafe(serve(), loop).result(10))
-        return f"http://localhost:{sockets[0].getsockname()[1]}/app"
+        return f"http://localhost:{sockets[0].getsockname()[1]}/app", seen
 
     thread = threading.Thread(target=loop.run_forever, daemon=True)
     thread.start()
@@ -168,7 +181,7 @@ def misbehaving():
 
 
 def test_a_session_closed_on_opening_is_an_error(misbehaving):
-    url = misbehaving("close")
+    url, _ = misbehaving("close")
     tic = time.monotonic()
     with pytest.raises(SessionClosed, match="1011"):
         LightSession(url, page=False, timeout=20)
@@ -176,7 +189,7 @@ def test_a_session_closed_on_opening_is_an_error(misbehaving):
 
 
 def test_a_server_that_never_answers_times_out(misbehaving):
-    url = misbehaving("silent")
+    url, _ = misbehaving("silent")
     tic = time.monotonic()
     with pytest.raises(TimeoutError, match="no ACK"):
         LightSession(url, page=False, timeout=1.5)
@@ -184,7 +197,7 @@ def test_a_server_that_never_answers_times_out(misbehaving):
 
 
 def test_a_session_closed_while_waiting_is_an_error(misbehaving):
-    url = misbehaving("pull")
+    url, _ = misbehaving("pull")
     session = LightSession(url, page=False, timeout=20)
     try:
         tic = time.monotonic()
@@ -193,3 +206,15 @@ def test_a_session_closed_while_waiting_is_an_error(misbehaving):
         assert time.monotonic() - tic < 5
     finally:
         session.close()
+
+
+def test_the_page_token_and_cookies_go_with_the_websocket(misbehaving):
+    """As a browser: the session token read from the page is the subprotocol, and the
+    page's cookies (a proxy's route) go with the upgrade, so it reaches the same backend."""
+    url, seen = misbehaving("close")
+    with pytest.raises(SessionClosed):
+        LightSession(url, timeout=20)
+    [headers] = seen
+    assert headers["Sec-Websocket-Protocol"] == "bokeh, tok-from-page"
+    assert headers["Cookie"] == "impact_route=r42"
+    assert headers["Origin"] == url.rsplit("/", 1)[0]
