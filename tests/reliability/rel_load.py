@@ -1,8 +1,9 @@
 """A classroom against one served app: N concurrent sessions moving sliders.
 
-Each session is a Bokeh client session on the real page (``bokeh.client.pull_session``,
-Panel's models registered), driving the page's own widget models through the session
-document, as a browser's BokehJS does, and waiting for the plots' data sources to change.
+Each session is a client of the real page (``--client``, see CLIENTS: Bokeh's Python
+client by default here, the light client of rel_light_client.py by default for
+``--targets``), driving the page's own widget models through its copy of the document,
+as a browser's BokehJS does, and waiting for the plots' data sources to change.
 Per session, until the deadline: move the omega slider (2 moves in 3) or the r slider (1
 in 3, which restarts the bifurcation diagram), wait for the displacement data to arrive,
 and after an r move also for the diagram to finish; think 0.2-0.6 s; repeat.
