@@ -22,7 +22,7 @@ import tornado.netutil
 import tornado.web
 import tornado.websocket
 
-from rel_light_client import (LightSession, SessionClosed, SessionRefused,
+from rel_light_client import (LightSession, ServerError, SessionClosed, SessionRefused,
                               open_light_session)
 from rel_load import VIEWS, BokehClient, diagram_complete, five_views
 from rel_server import slider
@@ -101,7 +101,8 @@ def test_a_foreign_origin_is_refused_at_once(served):
 
 class _Misbehaving(tornado.websocket.WebSocketHandler):
     """``close``: closes as soon as it opens; ``silent``: never answers; ``pull``: ACK,
-    a document with no roots for the pull, then closes."""
+    a document with no roots for the pull, then closes; ``error``: ACK, then an ERROR
+    reply to the pull."""
 
     def check_origin(self, origin):
         return True
@@ -116,7 +117,7 @@ class _Misbehaving(tornado.websocket.WebSocketHandler):
         self.seen.append(dict(self.request.headers))
         if self.mode == "close":
             self.close(1011, "going away")
-        elif self.mode == "pull":
+        elif self.mode in ("pull", "error"):
             await self._send({"msgid": "a1", "msgtype": "ACK"}, {})
 
     async def on_message(self, message):
@@ -124,7 +125,10 @@ class _Misbehaving(tornado.websocket.WebSocketHandler):
         if len(self.fragments) == 3:
             header = json.loads(self.fragments[0])
             self.fragments = []
-            if header["msgtype"] == "PULL-DOC-REQ":
+            if header["msgtype"] == "PULL-DOC-REQ" and self.mode == "error":
+                await self._send({"msgid": "a2", "msgtype": "ERROR", "reqid": header["msgid"]},
+                                 {"text": "no such document", "traceback": None})
+            elif header["msgtype"] == "PULL-DOC-REQ":
                 await self._send({"msgid": "a2", "msgtype": "PULL-DOC-REPLY",
                                   "reqid": header["msgid"]},
                                  {"doc": {"title": "t", "roots": []}})
@@ -206,6 +210,12 @@ def test_a_session_closed_while_waiting_is_an_error(misbehaving):
         assert time.monotonic() - tic < 5
     finally:
         session.close()
+
+
+def test_an_error_reply_is_an_error(misbehaving):
+    url, _ = misbehaving("error")
+    with pytest.raises(ServerError, match="no such document"):
+        LightSession(url, page=False, timeout=20)
 
 
 def test_the_page_token_and_cookies_go_with_the_websocket(misbehaving):
