@@ -1,8 +1,9 @@
 """A classroom against one served app: N concurrent sessions moving sliders.
 
-Each session is a Bokeh client session on the real page (``bokeh.client.pull_session``,
-Panel's models registered), driving the page's own widget models through the session
-document, as a browser's BokehJS does, and waiting for the plots' data sources to change.
+Each session is a client of the real page (``--client``, see CLIENTS: Bokeh's Python
+client by default here, the light client of rel_light_client.py by default for
+``--targets``), driving the page's own widget models through its copy of the document,
+as a browser's BokehJS does, and waiting for the plots' data sources to change.
 Per session, until the deadline: move the omega slider (2 moves in 3) or the r slider (1
 in 3, which restarts the bifurcation diagram), wait for the displacement data to arrive,
 and after an r move also for the diagram to finish; think 0.2-0.6 s; repeat.
@@ -40,10 +41,43 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+from rel_light_client import open_light_session  # noqa: E402
 from rel_server import (RESULTS, ROOT, Served, group_cpu_s, group_pids,  # noqa: E402
                         group_rss_mb, open_session, process_cpu_s, pump, slider, source)
 
 VIEWS = ("displacement", "phase", "impact_map", "poincare", "bifurcation")
+
+#: The load clients. "light" (rel_light_client.py): the page's HTTP GET, then Bokeh's
+#: websocket protocol spoken directly, the document kept as plain data, what the page
+#: sends once shown; "light-ws": the same without the page (the server makes the
+#: session when the websocket opens, as for Bokeh's client); "bokeh": Bokeh's Python
+#: client (``bokeh.client``, the document as Bokeh models: more CPU than the server).
+CLIENTS = ("light", "light-ws", "bokeh")
+
+
+class BokehClient:
+    """Bokeh's client session (rel_server.open_session) behind the light session's
+    interface: ``document``, ``models_at_pull``, ``wait(predicate, timeout)``, ``close()``."""
+
+    def __init__(self, url: str, args: dict | None = None):
+        self.session = open_session(url, args)
+        self.document = self.session.document
+        self.models_at_pull = len(self.document.models)
+
+    def wait(self, predicate, timeout: float) -> bool:
+        return pump(self.session, predicate, timeout)
+
+    def close(self) -> None:
+        self.session.close()
+
+
+def open_client(kind: str, url: str, args: dict | None = None):
+    """A session on the page at ``url`` through the load client ``kind`` (CLIENTS)."""
+    if kind == "bokeh":
+        return BokehClient(url, args)
+    if kind in ("light", "light-ws"):
+        return open_light_session(url, args, page=kind == "light")
+    raise ValueError(f"unknown client {kind!r}; one of {', '.join(CLIENTS)}")
 
 
 @dataclasses.dataclass
@@ -94,7 +128,8 @@ def five_views(doc) -> bool:
 
 
 def drive(url: str, log: SessionLog, start: float, deadline: float, bif_n: int,
-          together: threading.Barrier | None = None, seconds: float = 0.0) -> None:
+          together: threading.Barrier | None = None, seconds: float = 0.0,
+          client: str = "bokeh") -> None:
     """One student: connect, then move sliders until the deadline. With ``together``,
     wait until every student's page is complete and move sliders for ``seconds`` from
     then on (all active at once, however long connecting took)."""
@@ -103,10 +138,10 @@ def drive(url: str, log: SessionLog, start: float, deadline: float, bif_n: int,
     try:
         time.sleep(max(0.0, start - time.monotonic()))
         tic = time.monotonic()
-        session = open_session(url, {"bif_n": str(bif_n)})
+        session = open_client(client, url, {"bif_n": str(bif_n)})
         doc = session.document
         log.connect = time.monotonic() - tic
-        pump(session, lambda: diagram_complete(doc), 120)
+        session.wait(lambda: diagram_complete(doc), 120)
         omega, r = slider(doc, "omega"), slider(doc, "r")
         if together is not None:
             try:
@@ -134,8 +169,8 @@ def drive(url: str, log: SessionLog, start: float, deadline: float, bif_n: int,
                 tic = time.monotonic()
                 omega.value = new_omega
                 moved = "omega"
-            ok = pump(session, lambda: source(doc, "displacement").data.get("x")
-                      is not before["displacement"], 60)
+            ok = session.wait(lambda: source(doc, "displacement").data.get("x")
+                              is not before["displacement"], 60)
             if not ok:
                 log.timeouts += 1
                 log.lost += 1
@@ -144,22 +179,22 @@ def drive(url: str, log: SessionLog, start: float, deadline: float, bif_n: int,
                 continue
             log.latencies.append(time.monotonic() - tic)
             if moved == "r":
-                done = pump(session, lambda: "complete" in _diagram_title(doc)
-                            and _diagram_title(doc) != title
-                            and f"r = {new_r:g}" in _diagram_title(doc), 120)
+                done = session.wait(lambda: "complete" in _diagram_title(doc)
+                                    and _diagram_title(doc) != title
+                                    and f"r = {new_r:g}" in _diagram_title(doc), 120)
                 if done:
                     log.diagram.append(time.monotonic() - tic)
                 else:
                     log.timeouts += 1
             else:
-                pump(session, lambda: False, 0.05)     # let the other views' patches in
+                session.wait(lambda: False, 0.05)      # let the other views' patches in
                 marker = doc.get_model_by_name("bifurcation_marker")
                 log.marker_ok = log.marker_ok or marker.location == new_omega
             after = _columns(doc)
             log.changed |= {v for v in VIEWS if after[v] is not before[v]}
             k += 1
             think = rng.uniform(0.2, 0.6)
-            pump(session, lambda: False, think)
+            session.wait(lambda: False, think)
     except Exception as exc:                            # noqa: BLE001 - reported by the test
         log.error = f"{type(exc).__name__}: {exc}"
         if together is not None:
@@ -226,7 +261,7 @@ def sessions_gone(srv: Served, timeout: float = 60.0, explorers: int = 0) -> dic
 
 def _round(srv: Served, sessions: int, seconds: float, bif_n: int, stagger: float,
            explorers: int | None, rss=None, settle=None, url: str | None = None,
-           together: bool = False):
+           together: bool = False, client: str = "bokeh"):
     """One classroom: ``sessions`` students for ``seconds`` each; RSS sampled meanwhile.
     ``rss``/``settle`` measure memory (default: the server process), ``explorers`` the
     app sessions alive before (None: not counted, for servers without the probe)."""
@@ -251,7 +286,7 @@ def _round(srv: Served, sessions: int, seconds: float, bif_n: int, stagger: floa
     barrier = threading.Barrier(sessions) if together else None
     threads = [threading.Thread(target=drive, args=(url or srv.url, logs[i],
                                                    t0 + stagger * i, deadline, bif_n,
-                                                   barrier, seconds),
+                                                   barrier, seconds, client),
                                 daemon=True)
                for i in range(sessions)]
     for t in threads:
@@ -270,7 +305,7 @@ def _round(srv: Served, sessions: int, seconds: float, bif_n: int, stagger: floa
 
 
 def run(sessions: int, seconds: float, rounds: int = 2, bif_n: int = 400,
-        stagger: float = 0.25) -> dict:
+        stagger: float = 0.25, client: str = "bokeh") -> dict:
     """``rounds`` classrooms one after the other on one server. Memory: the baseline
     (after one warm session), the peak, RSS after each round, and the app sessions
     still alive after each round (must be none)."""
@@ -279,7 +314,7 @@ def run(sessions: int, seconds: float, rounds: int = 2, bif_n: int = 400,
     try:
         # warm: one session through every path once (JIT, caches, imports), then gone
         warm = SessionLog(-1)
-        drive(srv.url, warm, time.monotonic(), time.monotonic() + 4.0, bif_n)
+        drive(srv.url, warm, time.monotonic(), time.monotonic() + 4.0, bif_n, client=client)
         assert not warm.error, warm.error
         offset = srv.log_offset()
         objects_before = sessions_gone(srv, explorers=0)
@@ -287,14 +322,14 @@ def run(sessions: int, seconds: float, rounds: int = 2, bif_n: int = 400,
         # sliders move for ``seconds`` once every page is complete: under load connecting
         # alone can take longer than a short round
         done = [_round(srv, sessions, seconds, bif_n, stagger, objects_before["Explorer"],
-                       together=True)
+                       together=True, client=client)
                 for _ in range(rounds)]
         logs = [lg for r in done for lg in r["logs"]]
         lat = [x for lg in logs for x in lg.latencies]
         dia = [x for lg in logs for x in lg.diagram]
         return {
             "sessions": sessions, "seconds": seconds, "rounds": rounds, "bif_n": bif_n,
-            "machine": machine(), "wall": round(sum(r["wall"] for r in done), 1),
+            "client": client, "machine": machine(), "wall": round(sum(r["wall"] for r in done), 1),
             "hung_threads": sum(r["hung"] for r in done),
             "updates": len(lat), "diagrams": len(dia),
             "latency_median_ms": round(1e3 * statistics.median(lat), 1) if lat else None,
@@ -411,22 +446,23 @@ class Visit:
     error: str = ""
 
 
-def visit(url: str, v: Visit, start_at: float, limit: float = 60.0) -> None:
-    """Open one session at ``start_at``; wait (at most ``limit`` s from the start) for
-    its five views and its complete diagram; close it."""
+def visit(url: str, v: Visit, start_at: float, limit: float = 60.0,
+          client: str = "light") -> None:
+    """Open one session (load client ``client``) at ``start_at``; wait (at most ``limit``
+    s from the start) for its five views and its complete diagram; close it."""
     time.sleep(max(0.0, start_at - time.monotonic()))
     v.start = t0 = time.monotonic()
     session = None
     try:
-        session = open_session(url)
+        session = open_client(client, url)
         doc = session.document
         v.connect = time.monotonic() - t0
-        v.models = len(doc.models)
-        if five_views(doc) or pump(session, lambda: five_views(doc),
-                                   max(0.1, limit - (time.monotonic() - t0))):
+        v.models = session.models_at_pull
+        if five_views(doc) or session.wait(lambda: five_views(doc),
+                                           max(0.1, limit - (time.monotonic() - t0))):
             v.views = time.monotonic() - t0
         done = lambda: five_views(doc) and diagram_complete(doc)  # noqa: E731
-        if done() or pump(session, done, max(0.1, limit - (time.monotonic() - t0))):
+        if done() or session.wait(done, max(0.1, limit - (time.monotonic() - t0))):
             v.complete = time.monotonic() - t0
         else:
             v.error = f"not complete {limit:g} s after connecting"
@@ -440,6 +476,10 @@ def visit(url: str, v: Visit, start_at: float, limit: float = 60.0) -> None:
                 pass
 
 
+def _round_or_none(x, digits: int = 2):
+    return None if x is None or x != x else round(x, digits)
+
+
 def _stats(values) -> dict:
     values = [x for x in values if x == x]
     if not values:
@@ -447,13 +487,13 @@ def _stats(values) -> dict:
     return {"median": round(statistics.median(values), 3), "max": round(max(values), 3)}
 
 
-def scenario_sequential(target: Target, n: int = 10) -> dict:
+def scenario_sequential(target: Target, n: int = 10, client: str = "light") -> dict:
     """One warm-up session, then ``n`` sessions one after another; server CPU each,
     from before it connects until the server is idle again after it closed."""
     def one(i):
         v = Visit(i)
         c0 = target.cpu()
-        visit(target.url, v, time.monotonic())
+        visit(target.url, v, time.monotonic(), client=client)
         target.idle()
         return v, target.cpu() - c0
 
@@ -478,7 +518,7 @@ def scenario_sequential(target: Target, n: int = 10) -> dict:
 
 
 def scenario_burst(target: Target, n: int = 30, window: float = 5.0,
-                   target_s: float = 60.0, limit: float = 300.0) -> dict:
+                   target_s: float = 60.0, limit: float = 300.0, client: str = "light") -> dict:
     """``n`` sessions opening within ``window`` s, each until complete (given up
     ``limit`` s after it began to connect); how many were complete ``target_s`` s after
     the burst began."""
@@ -486,7 +526,8 @@ def scenario_burst(target: Target, n: int = 30, window: float = 5.0,
     split0 = target.cpu_by_process()
     k0, c0, t0 = client_cpu_s(), target.cpu(), time.monotonic() + 0.5
     threads = [threading.Thread(target=visit, args=(target.url, visits[i],
-                                                    t0 + window * i / max(1, n - 1), limit),
+                                                    t0 + window * i / max(1, n - 1), limit,
+                                                    client),
                                 daemon=True) for i in range(n)]
     for t in threads:
         t.start()
@@ -511,6 +552,9 @@ def scenario_burst(target: Target, n: int = 30, window: float = 5.0,
         "connect_s": _stats(v.connect for v in visits),
         "connect_to_five_views_s": _stats(v.views for v in visits),
         "connect_to_complete_s": _stats(v.complete for v in visits),
+        # from the burst's start until the last session had its five views
+        "all_five_views_within_s": _round_or_none(max(
+            (v.start - t0 + v.views for v in visits if v.views == v.views), default=None)),
         "models": sorted({v.models for v in visits if v.models}),
         "errors": [v.error for v in visits if v.error],
         "hung_threads": sum(t.is_alive() for t in threads),
@@ -518,14 +562,14 @@ def scenario_burst(target: Target, n: int = 30, window: float = 5.0,
 
 
 def scenario_active(target: Target, n: int = 30, seconds: float = 60.0,
-                    bif_n: int = 400) -> dict:
+                    bif_n: int = 400, client: str = "light") -> dict:
     """``n`` sessions open within 5 s; once every page is complete, all move sliders
     for ``seconds`` s (see ``drive``)."""
     baseline = _settle_rss(target.rss, 30) if target.pgids else float("nan")
     k0, c0 = client_cpu_s(), target.cpu()
     r = _round(None, n, seconds, bif_n, stagger=5.0 / max(1, n), explorers=None,
                rss=target.rss, settle=lambda s: _settle_rss(target.rss, s) if target.pgids
-               else float("nan"), url=target.url, together=True)
+               else float("nan"), url=target.url, together=True, client=client)
     logs = r["logs"]
     lat = [x for lg in logs for x in lg.latencies]
     dia = [x for lg in logs for x in lg.diagram]
@@ -552,35 +596,45 @@ def scenario_active(target: Target, n: int = 30, seconds: float = 60.0,
 
 def run_targets(deployments=("single", "procs2", "proxy"), scenarios=SCENARIOS,
                 sequential: int = 10, burst: int = 30, active: int = 30,
-                seconds: float = 60.0, url: str | None = None, pgids=()) -> dict:
-    """Every scenario on every deployment (or on the page at ``url``)."""
-    out = {"machine": machine(), "load": os.getloadavg(), "runs": []}
+                seconds: float = 60.0, url: str | None = None, pgids=(),
+                client: str = "light") -> dict:
+    """Every scenario on every deployment (or on the page at ``url``), with the load
+    client ``client`` (CLIENTS)."""
+    out = {"machine": machine(), "load": os.getloadavg(), "client": client, "runs": []}
     for kind in ([None] if url else deployments):
         target = (Target(f"served at {url}", url, pgids) if url else start_target(kind))
         res = {"deployment": target.name, "key": kind or "url"}
         try:
             if "sequential" in scenarios:
-                res["sequential"] = scenario_sequential(target, sequential)
+                res["sequential"] = scenario_sequential(target, sequential, client)
             else:                                       # one warm-up session
-                visit(target.url, Visit(-1), time.monotonic())
+                visit(target.url, Visit(-1), time.monotonic(), client=client)
                 target.idle()
             if "burst" in scenarios:
-                res["burst"] = scenario_burst(target, burst)
+                res["burst"] = scenario_burst(target, burst, client=client)
                 target.idle()
             if "active" in scenarios:
-                res["active"] = scenario_active(target, active, seconds)
+                res["active"] = scenario_active(target, active, seconds, client=client)
             res["bad_log_lines"] = target.bad_log()[:20]
         finally:
             target.stop()
         out["runs"].append(res)
         print(json.dumps(res, indent=1), flush=True)
+    out["load_end"] = os.getloadavg()
     return out
 
 
 def targets_markdown(res: dict) -> str:
+    clients = {"light": "light clients (rel_light_client.py: the page's GET, then the "
+                        "websocket protocol, no Bokeh models)",
+               "light-ws": "light clients without the page's GET",
+               "bokeh": "Bokeh client sessions"}[res.get("client", "bokeh")]
+    end = (f", at the end {', '.join(f'{x:.1f}' for x in res['load_end'])}"
+           if res.get("load_end") else "")
     lines = [f"- machine: {res['machine']}; load average at the start "
-             f"{', '.join(f'{x:.1f}' for x in res['load'])}; server, clients (Bokeh client "
-             "sessions, threads of one process) and nginx on the same machine (loopback)", ""]
+             f"{', '.join(f'{x:.1f}' for x in res['load'])}{end}; server, clients "
+             f"({clients}, threads of one process) and nginx on the same machine "
+             "(loopback)", ""]
     head = "| | " + " | ".join(r["deployment"] for r in res["runs"]) + " |"
     lines += [head, "|---" * (len(res["runs"]) + 1) + "|"]
 
@@ -607,6 +661,8 @@ def targets_markdown(res: dict) -> str:
     row("burst: server CPU by process", lambda r: " + ".join(
         f"{c:g}" for c in r["burst"]["server_cpu_by_process_s"].values()) + " s")
     row("burst: test clients' own CPU", lambda r: f"{r['burst']['client_cpu_s']} s")
+    row("burst: the last session's five views after",
+        lambda r: f"{r['burst']['all_five_views_within_s']} s")
     row("burst: connect → five views (median / max)",
         lambda r: f"{r['burst']['connect_to_five_views_s']['median']} s / "
                   f"{r['burst']['connect_to_five_views_s']['max']} s")
@@ -680,6 +736,9 @@ def main(argv=None) -> int:
     ap.add_argument("--server-pgid", type=int, action="append", default=[],
                     help="with --url: process group(s) of that server, for its CPU and RSS "
                          "(e.g. $(ps -o pgid= -p PID)); without it they are not measured")
+    ap.add_argument("--client", choices=CLIENTS, default=None,
+                    help="the load client: light (default with --targets), light-ws, or "
+                         "bokeh (default for the two-round classroom); see CLIENTS")
     ap.add_argument("--sequential", type=int, default=10, help="sequential sessions (10)")
     ap.add_argument("--burst", type=int, default=30, help="sessions in the burst (30)")
     ap.add_argument("--sessions", type=int, default=None,
@@ -701,7 +760,8 @@ def main(argv=None) -> int:
         else:
             res = run_targets(tuple(args.deployments.split(",")),
                               tuple(args.scenarios.split(",")), args.sequential, args.burst,
-                              args.sessions or 30, args.seconds, args.url, args.server_pgid)
+                              args.sessions or 30, args.seconds, args.url, args.server_pgid,
+                              args.client or "light")
             (RESULTS / "targets.json").write_text(json.dumps(res, indent=1))
             print(f"figures: {RESULTS / 'targets.json'}")
         text = targets_markdown(res)
@@ -713,7 +773,7 @@ def main(argv=None) -> int:
     if args.from_json:
         res = json.loads(Path(args.from_json).read_text())
     else:
-        res = run(sessions, args.seconds, args.rounds)
+        res = run(sessions, args.seconds, args.rounds, client=args.client or "bokeh")
         (RESULTS / f"load-{sessions}.json").write_text(json.dumps(res, indent=1))
     text = markdown(res)
     print(text)

@@ -376,7 +376,8 @@ def slider(doc, name: str):
     """The Bokeh Slider model of setting ``name`` (in the bar, or inside a card's item)."""
     for m in _tagged(doc, name):
         for c in [m, *getattr(m, "children", [])]:
-            if type(c).__name__ == "Slider":
+            # a Bokeh model's class, or a light client's model (rel_light_doc.py)
+            if getattr(c, "__view_model__", type(c).__name__) == "Slider":
                 return c
     raise KeyError(name)
 

@@ -1,7 +1,8 @@
 """A classroom on one server: concurrent sessions moving sliders (see rel_load.py).
 
 CI runs a small classroom (RELIABILITY_SESSIONS, default 6, for RELIABILITY_LOAD_SECONDS,
-default 12 s, twice) and the targets' sequential and burst scenarios at that size; the
+default 12 s, twice; Bokeh client sessions) and the targets' sequential and burst
+scenarios at that size (light clients, rel_light_client.py); the
 full classroom (24 sessions, 60 s, twice) is run with ``tests/reliability/rel_load.py
 --write``, the full targets (30 sessions, three deployments) with ``rel_load.py --targets
 --write``; their figures are in RELIABILITY.md. Loopback only; every client and the
@@ -97,6 +98,9 @@ def test_sessions_one_after_another_and_in_a_burst_all_complete(targets):
     assert len(seq["cpu_each_s"]) == 2 and all(c > 0 for c in seq["cpu_each_s"])
     # the server cannot have used more CPU than its cores had in the burst's wall time
     assert 0 < burst["server_cpu_s"] <= burst["wall_s"] * os.cpu_count()
+    # the light clients (rel_light_client.py) cost far less than the server they measure
+    # (Bokeh's Python client cost more than the server: 9.6 s to its 7.3 s in a burst of 30)
+    assert burst["client_cpu_s"] < 0.25 * burst["server_cpu_s"], burst
     assert len(seq["models"]) == 1 and seq["models"] == burst["models"]  # one page, one size
     assert targets["bad_log_lines"] == []
 
