@@ -11,6 +11,12 @@ sticking; :mod:`impactlib.tangent`) is carried when ctl[TANGENT] is JACOBIAN (J 
 final state with respect to the start) or QR_MARKS (J re-orthonormalised after every
 impact and at the sorted times ``marks``; log|R11|, log|R22| between marks[i] and
 marks[i + 1] summed in logs[i], J restarting as the identity at marks[0]).
+
+Numba counts references to arrays with atomic operations whenever a function taking
+arrays cannot prove them unneeded (it branches into stores or calls another kernel); per
+impact they cost about as much as the impact search itself.  So the loop fills one segment array in
+place, takes its samples and records its impacts itself, and the helpers it calls per
+impact read their arrays before branching.
 """
 from __future__ import annotations
 
@@ -22,7 +28,7 @@ import numpy as np
 from ._jit import jit
 from .chatter import STICK, impact_outcome
 from .events import IMPACT, NGRID, STEP_LIMIT, next_impact_grid, search_grid
-from .flight import G, R, T0, flight_state, release_time, start_segment
+from .flight import G, NSEG, R, fill_segment, flight_state, release_time
 from .integrators import advance_rk4, advance_rk45
 from ..model import RunStatus
 from .tangent import flow_jacobian, qr_step, saltation, tangent_product
@@ -86,16 +92,6 @@ def controls(t_end, t_record, hmax, rate, dt, rtol, atol, max_impacts, max_steps
 
 
 @jit
-def _sample_segment(sp, seg, t_hi, ts, xs, vs, i):
-    while i < ts.shape[0] and ts[i] <= t_hi:
-        x, v, a, j, rh, sc = flight_state(sp, seg, ts[i] - seg[T0])
-        xs[i] = x
-        vs[i] = v
-        i += 1
-    return i
-
-
-@jit
 def _sample_rest(g, t_hi, ts, xs, vs, i):
     while i < ts.shape[0] and ts[i] <= t_hi:
         xs[i] = g
@@ -118,13 +114,18 @@ def _record_impact(imp_t, imp_v, n_rec, t, vm, t_record):
 def _next_report(t, t_end, pc_t, ip, d_t, idn, marks, im):
     """The next time after t the run reports a state (a sample, a mark or its end): a
     chatter's tail is summed early only if it ends before (chatter.impact_outcome)."""
+    # each array read before any branch: Numba then drops the arrays' reference counting
+    # (atomic operations), as in every helper the loop calls per impact
+    tp = pc_t[ip] if ip < pc_t.shape[0] else math.inf
+    td = d_t[idn] if idn < d_t.shape[0] else math.inf
+    tm = marks[im] if im < marks.shape[0] else math.inf
     ts = t_end
-    if ip < pc_t.shape[0] and pc_t[ip] > t:
-        ts = min(ts, pc_t[ip])
-    if idn < d_t.shape[0] and d_t[idn] > t:
-        ts = min(ts, d_t[idn])
-    if im < marks.shape[0] and marks[im] > t:
-        ts = min(ts, marks[im])
+    if tp > t:
+        ts = min(ts, tp)
+    if td > t:
+        ts = min(ts, td)
+    if tm > t:
+        ts = min(ts, tm)
     return ts
 
 
@@ -198,6 +199,7 @@ def run_engine(sp, ctl, t, x, v, buf, res):
     t_mark0 = marks[0] if nm > 0 else -math.inf
     h45 = min(0.01 / rate, hmax)
     grid = search_grid(sp, rate) if method == EXACT else np.zeros(NGRID)
+    seg = np.empty(NSEG)
     # the last hops (rebound speed, length): a hop that left the wall as fast as this one
     # predicts its length (periodic orbits repeat them)
     hop_v = np.full(HOP_MEMORY, -1.0)
@@ -254,7 +256,7 @@ def run_engine(sp, ctl, t, x, v, buf, res):
             break
         started_at_rest = False
         if method == EXACT:
-            seg = start_segment(sp, t, x, v)
+            fill_segment(sp, seg, t, x, v)
             guess = -1.0
             best = HOP_MATCH_RTOL * v
             for jh in range(HOP_MEMORY):
@@ -268,8 +270,14 @@ def run_engine(sp, ctl, t, x, v, buf, res):
                 hop_s[n_hop % HOP_MEMORY] = s
                 n_hop += 1
             th = t + s
-            ip = _sample_segment(sp, seg, th, pc_t, pc_x, pc_v, ip)
-            idn = _sample_segment(sp, seg, th, d_t, d_x, d_v, idn)
+            # samples in the loop itself: a helper taking the arrays would pay their
+            # reference counting (atomic) on every flight
+            while ip < pc_t.shape[0] and pc_t[ip] <= th:
+                pc_x[ip], pc_v[ip] = flight_state(sp, seg, pc_t[ip] - t)[:2]
+                ip += 1
+            while idn < d_t.shape[0] and d_t[idn] <= th:
+                d_x[idn], d_v[idn] = flight_state(sp, seg, d_t[idn] - t)[:2]
+                idn += 1
             started_at_rest = s == 0.0 and x <= g and v == 0.0
             xh, vend = g, vh
             if kind != IMPACT:
@@ -298,7 +306,13 @@ def run_engine(sp, ctl, t, x, v, buf, res):
         x = g
         if not (started_at_rest and vh == 0.0):
             n_tot += 1
-            n_rec = _record_impact(imp_t, imp_v, n_rec, t, vh, t_record)
+            # recorded here, not by _record_impact: a helper storing into the arrays
+            # pays their reference counting (atomic) on every impact
+            if t >= t_record:
+                if n_rec < cap:
+                    imp_t[n_rec] = t
+                    imp_v[n_rec] = vh
+                n_rec += 1
             if t >= t_mark0:
                 n_marked += 1
                 vmin = min(vmin, -vh)

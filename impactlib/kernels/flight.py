@@ -98,8 +98,17 @@ def fastest_rate(sp):
 
 @jit
 def start_segment(sp, t0, x0, v0):
-    """Segment of free flight from state (x0, v0) at time t0."""
+    """Segment of free flight from state (x0, v0) at time t0 (a new array; see
+    :func:`fill_segment`)."""
     seg = np.empty(NSEG)
+    fill_segment(sp, seg, t0, x0, v0)
+    return seg
+
+
+@jit
+def fill_segment(sp, seg, t0, x0, v0):
+    """Write the segment of free flight from state (x0, v0) at time t0 into ``seg``
+    (length NSEG), for a loop that starts one segment after another without allocating."""
     om = sp[OM]
     ph = om * t0
     cph = math.cos(ph)
@@ -122,7 +131,6 @@ def start_segment(sp, t0, x0, v0):
     seg[HV0] = v0 - vp0
     seg[X0] = x0
     seg[V0] = v0
-    return seg
 
 
 @jit
