@@ -7,9 +7,11 @@ that each add one part of the engine's work per impact: the segment's set-up, th
 search (with the engine's guess from the hop memory, the hop's own length, and without
 a guess), what follows the impact; the whole run per impact last.  The differences
 between the loops are each part's cost; counts (closed-form evaluations, grid nodes,
-fallbacks to the certified walk) come from the same flights.  Medians over repeats in one
-process; run it against another checkout (``PYTHONPATH``-free: the checkout is this
-file's parent) in the same minutes to compare.
+fallbacks to the certified walk) come from the same flights.  The loops pass what the
+engine passes: tuples from flight.make_segment where the checkout has it, else arrays
+from start_segment.  Medians over repeats in one process; run it against another
+checkout (``PYTHONPATH``-free: the checkout is this file's parent) in the same minutes to
+compare.
 """
 from __future__ import annotations
 
@@ -32,6 +34,10 @@ from impactlib.kernels import flight as F  # noqa: E402
 from impactlib.kernels.chatter import impact_outcome  # noqa: E402
 from impactlib.kernels.entry import run_constants, simulate_run  # noqa: E402
 
+#: the engine's segment: a tuple (make_segment) or, in older checkouts, an array
+make_segment = getattr(F, "make_segment", F.start_segment)
+TUPLES = make_segment is not F.start_segment
+
 PAPER = il.Params(m=1.0, c=0.05, k=1.0, g=0.0, r=0.8, omega=2.0)
 T_END, T_RECORD = 500.0, 250.0
 
@@ -41,7 +47,7 @@ def loop_segments(sp, t0s, x0s, v0s, reps):
     acc = 0.0
     for _ in range(reps):
         for i in range(t0s.shape[0]):
-            seg = F.start_segment(sp, t0s[i], x0s[i], v0s[i])
+            seg = make_segment(sp, t0s[i], x0s[i], v0s[i])
             acc += seg[F.H0]
     return acc
 
@@ -49,12 +55,10 @@ def loop_segments(sp, t0s, x0s, v0s, reps):
 @njit(cache=False)
 def loop_flight_state(sp, t0s, x0s, v0s, ss, reps):
     acc = 0.0
-    segs = np.empty((t0s.shape[0], F.NSEG))
-    for i in range(t0s.shape[0]):
-        segs[i] = F.start_segment(sp, t0s[i], x0s[i], v0s[i])
     for _ in range(reps):
         for i in range(t0s.shape[0]):
-            x, v, a, j, rh, xs = F.flight_state(sp, segs[i], 0.5 * ss[i])
+            seg = make_segment(sp, t0s[i], x0s[i], v0s[i])
+            x, v, a, j, rh, xs = F.flight_state(sp, seg, 0.5 * ss[i])
             acc += x
     return acc
 
@@ -64,7 +68,7 @@ def loop_search(sp, t0s, x0s, v0s, s_ends, guesses, hmax, grid, reps):
     acc = 0.0
     for _ in range(reps):
         for i in range(t0s.shape[0]):
-            seg = F.start_segment(sp, t0s[i], x0s[i], v0s[i])
+            seg = make_segment(sp, t0s[i], x0s[i], v0s[i])
             kind, s, vh, ns = EV.next_impact_grid(sp, seg, s_ends[i], hmax, 10**7, grid,
                                                   guesses[i])
             acc += s
@@ -150,8 +154,10 @@ def profile(p, reps, repeats):
     per = n * reps
     out = {"impacts": sol.n_impacts, "flights": n, "nsteps": sol.nsteps,
            "stuck/chatter": stuck}
-    out["start_segment"] = median_ns(lambda: loop_segments(sp, t0s, x0s, v0s, reps), per, repeats)
-    out["flight_state"] = median_ns(lambda: loop_flight_state(sp, t0s, x0s, v0s, s, reps), per,
+    if TUPLES:
+        sp, grid = tuple(sp), tuple(grid)
+    out["segment"] = median_ns(lambda: loop_segments(sp, t0s, x0s, v0s, reps), per, repeats)
+    out["segment+flight_state"] = median_ns(lambda: loop_flight_state(sp, t0s, x0s, v0s, s, reps), per,
                                     repeats)
     for name, gs in (("engine guess", guesses), ("exact guess", s), ("no guess", np.full(n, -1.0))):
         out["segment+search, " + name] = median_ns(
@@ -170,7 +176,8 @@ def profile(p, reps, repeats):
     out["simulate_run (ns per call)"] = t_run
     out["entry fixed cost (ns)"] = t_empty
     out["engine per flight"] = (t_run - t_empty) / n
-    ev, walk, nodes = search_counts(sp, t0s, x0s, v0s, s_ends, guesses, hmax, grid)
+    ev, walk, nodes = search_counts(np.asarray(sp), t0s, x0s, v0s, s_ends, guesses, hmax,
+                                    np.asarray(grid))
     out["evals per flight"] = float(ev.mean())
     out["grid nodes per flight"] = float(nodes.mean())
     out["walk fallbacks"] = int(walk.sum())
@@ -183,7 +190,7 @@ def main():
     ap.add_argument("--repeats", type=int, default=15)
     ap.add_argument("--omega", type=float, nargs="*", default=[2.0])
     args = ap.parse_args()
-    print(f"checkout {ROOT}; load {' '.join(f'{v:.2f}' for v in os.getloadavg())}")
+    print(f"checkout {ROOT} ({'tuples' if TUPLES else 'arrays'}); load {' '.join(f'{v:.2f}' for v in os.getloadavg())}")
     for w in args.omega:
         out = profile(PAPER.replace(omega=w), args.reps, args.repeats)
         print(f"omega = {w}")

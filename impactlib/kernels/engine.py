@@ -12,11 +12,11 @@ final state with respect to the start) or QR_MARKS (J re-orthonormalised after e
 impact and at the sorted times ``marks``; log|R11|, log|R22| between marks[i] and
 marks[i + 1] summed in logs[i], J restarting as the identity at marks[0]).
 
-Numba counts references to arrays with atomic operations whenever a function taking
-arrays cannot prove them unneeded (it branches into stores or calls another kernel); per
-impact they cost about as much as the impact search itself.  So the loop fills one segment array in
-place, takes its samples and records its impacts itself, and the helpers it calls per
-impact read their arrays before branching.
+Numba counts references to arrays with atomic operations in every kernel taking arrays
+that calls another kernel or stores in a branch; per impact they cost about as much as
+the impact search itself.  So the exact method's loop passes the constants, the grid and
+each segment as tuples (flight.py), takes its samples and records its impacts itself,
+and the helpers it calls per impact with arrays read them before branching.
 """
 from __future__ import annotations
 
@@ -28,7 +28,9 @@ import numpy as np
 from ._jit import jit
 from .chatter import STICK, impact_outcome
 from .events import IMPACT, NGRID, STEP_LIMIT, next_impact_grid, search_grid
-from .flight import G, NSEG, R, fill_segment, flight_state, release_time
+from numba.np.unsafe.ndarray import to_fixed_tuple
+
+from .flight import G, NSP, R, flight_state, make_segment, release_time
 from .integrators import advance_rk4, advance_rk45
 from ..model import RunStatus
 from .tangent import flow_jacobian, qr_step, saltation, tangent_product
@@ -199,7 +201,10 @@ def run_engine(sp, ctl, t, x, v, buf, res):
     t_mark0 = marks[0] if nm > 0 else -math.inf
     h45 = min(0.01 / rate, hmax)
     grid = search_grid(sp, rate) if method == EXACT else np.zeros(NGRID)
-    seg = np.empty(NSEG)
+    # the constants, the grid and each segment as tuples in the exact method's loop
+    # (flight.py): no reference counting per impact
+    spt = to_fixed_tuple(sp, NSP)
+    gridt = to_fixed_tuple(grid, NGRID)
     # the last hops (rebound speed, length): a hop that left the wall as fast as this one
     # predicts its length (periodic orbits repeat them)
     hop_v = np.full(HOP_MEMORY, -1.0)
@@ -216,7 +221,7 @@ def run_engine(sp, ctl, t, x, v, buf, res):
             v = -r * v
         if v <= 0.0:
             v = 0.0
-        mode, tn = impact_outcome(sp, t, v, rate, TAIL_TOL,
+        mode, tn = impact_outcome(spt, t, v, rate, TAIL_TOL,
                                   _next_report(t, t_end, pc_t, ip, d_t, idn, marks, im))
         if mode == STICK:
             ip = _sample_rest(g, tn, pc_t, pc_x, pc_v, ip)
@@ -227,7 +232,7 @@ def run_engine(sp, ctl, t, x, v, buf, res):
     while True:
         if stuck:
             # the tangent follows the state: zero through sticking, whatever came before
-            tr = release_time(sp, t)
+            tr = release_time(spt, t)
             te = min(tr, t_end)
             ip = _sample_rest(g, te, pc_t, pc_x, pc_v, ip)
             idn = _sample_rest(g, te, d_t, d_x, d_v, idn)
@@ -256,15 +261,15 @@ def run_engine(sp, ctl, t, x, v, buf, res):
             break
         started_at_rest = False
         if method == EXACT:
-            fill_segment(sp, seg, t, x, v)
+            seg = make_segment(spt, t, x, v)
             guess = -1.0
             best = HOP_MATCH_RTOL * v
             for jh in range(HOP_MEMORY):
                 if abs(hop_v[jh] - v) < best:
                     best = abs(hop_v[jh] - v)
                     guess = hop_s[jh]
-            kind, s, vh, ns = next_impact_grid(sp, seg, t_end - t, hmax, max_steps - nsteps,
-                                               grid, guess)
+            kind, s, vh, ns = next_impact_grid(spt, seg, t_end - t, hmax, max_steps - nsteps,
+                                               gridt, guess)
             if kind == IMPACT and v > 0.0:
                 hop_v[n_hop % HOP_MEMORY] = v
                 hop_s[n_hop % HOP_MEMORY] = s
@@ -273,15 +278,15 @@ def run_engine(sp, ctl, t, x, v, buf, res):
             # samples in the loop itself: a helper taking the arrays would pay their
             # reference counting (atomic) on every flight
             while ip < pc_t.shape[0] and pc_t[ip] <= th:
-                pc_x[ip], pc_v[ip] = flight_state(sp, seg, pc_t[ip] - t)[:2]
+                pc_x[ip], pc_v[ip] = flight_state(spt, seg, pc_t[ip] - t)[:2]
                 ip += 1
             while idn < d_t.shape[0] and d_t[idn] <= th:
-                d_x[idn], d_v[idn] = flight_state(sp, seg, d_t[idn] - t)[:2]
+                d_x[idn], d_v[idn] = flight_state(spt, seg, d_t[idn] - t)[:2]
                 idn += 1
             started_at_rest = s == 0.0 and x <= g and v == 0.0
             xh, vend = g, vh
             if kind != IMPACT:
-                xh, vend, ae, je, rhe, sce = flight_state(sp, seg, s)
+                xh, vend, ae, je, rhe, sce = flight_state(spt, seg, s)
         elif method == RK4:
             kind, th, xh, vh, ns, ip, idn = advance_rk4(
                 sp, t, x, v, t_end, ctl[DT], pc_t, pc_x, pc_v, ip, d_t, d_x, d_v, idn,
@@ -327,7 +332,7 @@ def run_engine(sp, ctl, t, x, v, buf, res):
         vplus = -r * vh
         if vplus <= 0.0:
             vplus = 0.0
-        mode, tn = impact_outcome(sp, t, vplus, rate, TAIL_TOL,
+        mode, tn = impact_outcome(spt, t, vplus, rate, TAIL_TOL,
                                   _next_report(t, t_end, pc_t, ip, d_t, idn, marks, im))
         if mode == STICK:
             if tn > t and t >= t_record:
