@@ -27,7 +27,8 @@ import numpy as np
 
 from ._jit import jit
 from .chatter import STICK, impact_outcome
-from .events import IMPACT, NGRID, STEP_LIMIT, next_impact_grid, search_grid
+from .events import IMPACT, STEP_LIMIT
+from .grid import NGRID, next_impact_grid, search_grid
 from numba.np.unsafe.ndarray import to_fixed_tuple
 
 from .flight import G, NSP, R, flight_state, make_segment, release_time
