@@ -16,7 +16,7 @@ import numpy as np
 
 from ._jit import jit
 from .events import EPS, IMPACT, next_impact, short_hop
-from .flight import C_, CPH, FA, G, H0, HV0, K, M, NSEG, OM, PP, QQ, RES, SPH, T0, V0, W0SQ, X0
+from .flight import C_, CPH, FA, G, H0, HRATE, HV0, K, M, NSEG, OM, PP, QQ, RES, SPH, T0, V0, W0SQ, X0
 from .flight import derivative_bounds, flight_state
 
 # layout of the per-run grid array: step, the homogeneous flow over one step
@@ -61,6 +61,17 @@ def _clear_of_root(v, a, m3):
     d = math.sqrt(0.25 * a * a + 2.0 * m3 * v / 3.0)
     t = (0.5 * a + d) / (m3 / 3.0) if a >= 0.0 else 2.0 * v / (d - 0.5 * a)
     return t * (1.0 - 1e-12)
+
+
+@jit
+def _clears(v, a, m3, T):
+    """True if v tau + a tau^2 / 2 - m3 tau^3 / 6 > 0 on (0, T], for v > 0, without a
+    square root: divided by tau it is a concave quadratic (m3 >= 0), positive on [0, T]
+    where it is at T; its value there must exceed 1e-12 of its terms (rounding), as
+    :func:`_clear_of_root` keeps 1e-12 from its root."""
+    at = 0.5 * a * T
+    mt = m3 * T * T / 6.0
+    return v + at - mt > 1e-12 * (v + abs(at) + mt)
 
 
 @jit
@@ -143,26 +154,31 @@ def next_impact_grid(sp, seg, s_end, hmax, max_steps, grid, s_guess):
     g = sp[G]
     x0 = seg[X0]
     v0 = seg[V0]
-    if x0 == g and v0 > 0.0:
-        ok, s, v = short_hop(sp, seg, s_end)
-        if ok:
-            return IMPACT, s, v, 0
-    if h <= 0.0 or (x0 - g <= 0.0 and v0 <= 0.0):
-        return next_impact(sp, seg, s_end, hmax, max_steps)
     om, pp, qq = sp[OM], sp[PP], sp[QQ]
     m, c, k = sp[M], sp[C_], sp[K]
     w0sq = sp[W0SQ]
     hh, hd = seg[H0], seg[HV0]
     cph, sph = seg[CPH], seg[SPH]
+    as_ = (cph - 2.0 * c * v0 - k * x0) / m
+    # short_hop's own first test (its parabola's length against the fastest rate),
+    # here so that a hop too long for it does not pay its call
+    if x0 == g and v0 > 0.0 and as_ < 0.0 and 2.0 * v0 / -as_ * max(om, sp[HRATE]) <= 0.5:
+        ok, s, v = short_hop(sp, seg, s_end)
+        if ok:
+            return IMPACT, s, v, 0
+    if h <= 0.0 or (x0 - g <= 0.0 and v0 <= 0.0):
+        return next_impact(sp, seg, s_end, hmax, max_steps)
     rh0 = math.sqrt(hd * hd + w0sq * hh * hh)
     m3, m4 = derivative_bounds(sp, rh0, s_end, x0, v0, s_end)
     herm = m4 * (h * h) * (h * h) / 384.0
     # size of the terms summed at a node (|h| <= rh0 / w0, |x_p| <= FA), for rounding
     size = rh0 / math.sqrt(w0sq) + rh0 + sp[FA] * (1.0 + om) + abs(g) + abs(x0)
+    rnd_step = 32.0 * EPS * size
+    h3 = h / 3.0
     fs, vs = x0 - g, v0
-    as_ = (cph - 2.0 * c * v0 - k * x0) / m
     s = 0.0
     n = 0
+    nodes = 1.0                     # n + 1, as a float
     f1 = fs
     v1 = vs
     hh1, hd1, cph1, sph1 = hh, hd, cph, sph
@@ -177,14 +193,18 @@ def next_impact_grid(sp, seg, s_end, hmax, max_steps, grid, s_guess):
         f1 = hh1 + pp * cph1 + qq * sph1 - g
         v1 = hd1 + om * (qq * cph1 - pp * sph1)
         n += 1
-        rnd = 32.0 * EPS * (n + 1) * size
+        nodes += 1.0
+        rnd = rnd_step * nodes
         if n == 1:
-            # starts on the wall: forward cubic bound from 0, backward from h
-            a1 = (cph1 - 2.0 * c * v1 - k * (f1 + g)) / m
-            tf = _clear_of_root(vs, as_, m3) if vs > 0.0 else 0.0
-            ok = f1 - rnd > 0.0 and (tf >= h or _cubic_positive(f1 - rnd, -v1, a1, m3, h - tf))
+            # starts on the wall: forward cubic bound from 0 (over the whole interval, or
+            # up to its root), backward from h
+            ok = f1 - rnd > 0.0
+            if ok and not (vs > 0.0 and _clears(vs, as_, m3, h)):
+                a1 = (cph1 - 2.0 * c * v1 - k * (f1 + g)) / m
+                tf = _clear_of_root(vs, as_, m3) if vs > 0.0 else 0.0
+                ok = tf >= h or _cubic_positive(f1 - rnd, -v1, a1, m3, h - tf)
         else:
-            ok = min(min(fs, fs + vs * h / 3.0), min(f1 - v1 * h / 3.0, f1)) > herm + rnd
+            ok = min(min(fs, fs + vs * h3), min(f1 - v1 * h3, f1)) > herm + rnd
         if not ok:
             break
         s = s1
@@ -215,9 +235,13 @@ def next_impact_grid(sp, seg, s_end, hmax, max_steps, grid, s_guess):
             ok, r, vr, ar, ne = _newton_root(sp, seg, guess, lo, hi)
             evals += ne
             if ok:
-                as_ = (cph - 2.0 * c * vs - k * (fs + g)) / m
+                # the backward bound from the root over the whole gap, or up to its root
+                # and the forward bound from s over the rest
                 gap = r - s
-                rnd = 32.0 * EPS * (n + 1) * size
+                if _clears(-vr, ar, m3, gap):
+                    return IMPACT, r, vr, evals
+                as_ = (cph - 2.0 * c * vs - k * (fs + g)) / m
+                rnd = rnd_step * nodes
                 tb = _clear_of_root(-vr, ar, m3)
                 if tb >= gap or _cubic_positive(fs - rnd, vs, as_, m3, gap - tb):
                     return IMPACT, r, vr, evals
