@@ -105,6 +105,18 @@ def _hermite_root(fa, va, fb, vb, h):
 
 
 @jit
+def _hop_root(v0, a0, j0, h):
+    """Approximate landing time of a hop from the wall with slope v0 > 0, acceleration
+    a0 < 0 and jerk j0 at the start: the root of its Taylor cubic divided by tau,
+    v0 + a0 tau / 2 + j0 tau^2 / 6 (the parabola's where that has none), at most h; a
+    starting guess only (Newton on the closed form follows)."""
+    b = 0.5 * a0
+    d = b * b - 4.0 * (j0 / 6.0) * v0
+    tau = 2.0 * v0 / (math.sqrt(d) - b) if d >= 0.0 else -2.0 * v0 / a0
+    return min(tau, h)
+
+
+@jit
 def _newton_root(sp, seg, s, lo, hi):
     """Newton on f = x - g from s, staying in (lo, hi].  Returns (ok, root, v, a,
     evaluations); ok only if every iterate went down the wall (v < 0) and the last step
@@ -211,7 +223,18 @@ def next_impact_grid(sp, seg, s_end, hmax, max_steps, grid, s_guess):
         hh, hd, cph, sph, fs, vs = hh1, hd1, cph1, sph1, f1, v1
     # [s, s + h] is not certified (or passes s_end): the wall is near
     evals = 0
-    if s > 0.0 and s + h < s_end:
+    if s == 0.0 and fs == 0.0 and vs > 0.0 and as_ < 0.0 and f1 <= 0.0 and h < s_end:
+        # a hop from the wall landing in the first interval (chatter): Newton from the
+        # caller's guess or the start's Taylor cubic, accepted if the cubic lower bounds
+        # forward from the wall and backward from the root cover the hop
+        j0 = (-om * sph - 2.0 * c * as_ - k * vs) / m
+        guess = s_guess if 0.0 < s_guess <= h else _hop_root(vs, as_, j0, h)
+        ok, r, vr, ar, ne = _newton_root(sp, seg, guess, 0.0, h)
+        evals += ne
+        if ok and (_clears(-vr, ar, m3, r) or _clears(vs, as_, m3, r)
+                   or _clear_of_root(vs, as_, m3) + _clear_of_root(-vr, ar, m3) >= r):
+            return IMPACT, r, vr, evals
+    elif s > 0.0 and s + h < s_end:
         lo = s
         hi = s + h
         guess = -1.0

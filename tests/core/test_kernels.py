@@ -210,6 +210,43 @@ def test_short_hops_match_the_certified_walk_and_mpmath():
     assert taken >= 10
 
 
+def test_hops_landing_in_the_first_grid_interval_match_the_walk_and_mpmath():
+    """Chatter hops too long for the Taylor short hop that land inside the grid's first
+    interval (Newton on the closed form, certified by cubic bounds forward from the wall
+    and backward from the root) agree with the certified walk (next_impact) to a few
+    ulps of t, and a sample with the mpmath reference's first impact."""
+    from impactlib.verify.reference import mp_impacts
+
+    p = PAPER.replace(omega=0.2)
+    sp = constants(p)
+    hmax = float(E.step_caps(sp))
+    grid = GR.search_grid(sp, p.rate())
+    h = grid[GR.GSTEP]
+    sol = il.simulate(p, t_end=300.0, t_record=0.0)
+    taken = fewer = 0
+    for t, v in zip(sol.impacts.t, sol.impacts.v):
+        u = -p.r * v
+        seg = F.start_segment(sp, t, p.g, u)
+        if u <= 0.0 or E.short_hop(sp, seg, 100.0)[0]:
+            continue
+        k1, s1, v1, n1 = E.next_impact(sp, seg, 100.0, hmax, 10**6)
+        if not (k1 == E.IMPACT and s1 < h):
+            continue
+        k2, s2, v2, n2 = GR.next_impact_grid(sp, seg, 100.0, hmax, 10**6, grid, -1.0)
+        assert k2 == E.IMPACT
+        assert abs(s2 - s1) <= 8 * EPS * (t + s1), (t, s1, s2)
+        # v moves by the acceleration times the time's rounding
+        a = F.flight_state(sp, seg, s1)[2]
+        assert abs(v2 - v1) <= 8 * EPS * (t + s1) * abs(a) + 64 * EPS * abs(v1), (t, v1, v2)
+        fewer += n2 < n1
+        if taken % 8 == 0:
+            ref = mp_impacts(p, 1, x0=p.g, v0=float(u), t0=float(t))
+            assert abs(t + s2 - ref.t[0]) <= 8 * EPS * (t + s2)
+        taken += 1
+    # the grid search took them itself, not by falling back to the walk
+    assert taken >= 20 and fewer >= 0.9 * taken, (taken, fewer)
+
+
 @njit
 def _caller(sp, seg, s_end, hmax, grid, ts):
     # a user's own njit code calling the kernels
