@@ -19,6 +19,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numba.cpython.unsafe.tuple import tuple_setitem
 
 from ._jit import jit
 from .flight import (ALPHA, C_, CPH, FA, G, H0, HV0, K, M, OM, RES, SPH, T0, V0, W0SQ, X0,
@@ -260,6 +261,7 @@ def search_from(sp, seg, s, x, v, a, rh, xs, s_end, hmax, max_steps, nsteps):
 
 #: degree of the Taylor polynomial of a short hop (short_hop)
 SHORT_HOP_ORDER = 8
+_ZEROS = (0.0,) * (SHORT_HOP_ORDER + 1)
 
 
 @jit
@@ -313,24 +315,22 @@ def short_hop(sp, seg, s_end):
     if not (tau < s_end and rem * tau ** (n + 1) <= 4.0 * EPS * u * (abs(seg[T0]) + tau)):
         return False, 0.0, 0.0
     # Taylor coefficients a[j] = x^(j) / j! of f at the start (a[0] = 0)
-    e = np.empty(n + 1)
-    e[0] = x0
-    e[1] = u
+    # coefficients in tuples (tuple_setitem): no array allocated per hop
+    e = tuple_setitem(tuple_setitem(_ZEROS, 0, x0), 1, u)
     fj = 1.0
     for j in range(n - 1):
         # j-th derivative of cos(omega t): omega^j (cos, -sin, -cos, sin)[j mod 4]
         r4 = j % 4
         trig = cph if r4 == 0 else (-sph if r4 == 1 else (-cph if r4 == 2 else sph))
-        e[j + 2] = (fj * trig - 2.0 * c * e[j + 1] - k * e[j]) / m
+        e = tuple_setitem(e, j + 2, (fj * trig - 2.0 * c * e[j + 1] - k * e[j]) / m)
         fj *= om
     if not e[2] < 0.0:
         return False, 0.0, 0.0
-    a = np.empty(n + 1)
-    a[0] = 0.0
+    a = _ZEROS
     fj = 1.0
     for j in range(1, n + 1):
         fj *= j
-        a[j] = e[j] / fj
+        a = tuple_setitem(a, j, e[j] / fj)
     # tau_lo: Newton on q(tau) = (p - rem tau^(n+1)) / tau from the parabola's root
     tau_lo = tau_hi = 0.0
     for sign in (-1.0, 1.0):
@@ -357,12 +357,12 @@ def short_hop(sp, seg, s_end):
         return False, 0.0, 0.0
     # no earlier root: Bernstein coefficients of q_lo on [0, tau_lo] all positive
     # (coefficients c_i = a_(i+1) tau_lo^i, c_n = -rem tau_lo^n; degree n polynomial)
-    cc = np.empty(n + 1)
+    cc = _ZEROS
     p = 1.0
     for i in range(n):
-        cc[i] = a[i + 1] * p
+        cc = tuple_setitem(cc, i, a[i + 1] * p)
         p *= tau_lo
-    cc[n] = -rem * p
+    cc = tuple_setitem(cc, n, -rem * p)
     binom_n = 1.0
     for i in range(n + 1):
         # b_i = sum_{j <= i} C(i, j) / C(n, j) c_j
