@@ -218,7 +218,7 @@ def run_engine(sp, ctl, t, x, v, buf, res):
             n_rec = _record_impact(imp_t, imp_v, n_rec, t, v, t_record)
             n_tot += 1
             if tangent:
-                tangent_product(saltation(sp, t, v), jm)
+                tangent_product(saltation(spt, t, v), jm)
             v = -r * v
         if v <= 0.0:
             v = 0.0
@@ -300,7 +300,12 @@ def run_engine(sp, ctl, t, x, v, buf, res):
             vend = vh
         nsteps += ns
         if tangent:
-            tq, im = _tangent_to(sp, jm, th, tq, marks, logs, im, qr)
+            if im < nm and marks[im] <= th:
+                tq, im = _tangent_to(spt, jm, th, tq, marks, logs, im, qr)
+            elif not (qr and im == 0 and nm > 0):
+                # (with QR marks the tangent restarts at marks[0]: none is carried before)
+                tangent_product(flow_jacobian(spt, th - tq), jm)
+                tq = th
         if kind != IMPACT:
             # reached t_end, or stopped at the step limit: (th, xh, vend) is where
             t, x, v = th, xh, vend
@@ -322,10 +327,10 @@ def run_engine(sp, ctl, t, x, v, buf, res):
             if t >= t_mark0:
                 n_marked += 1
                 vmin = min(vmin, -vh)
-            if tangent:
-                tangent_product(saltation(sp, t, vh), jm)
+            if tangent and not (qr and im == 0 and nm > 0):
+                tangent_product(saltation(spt, t, vh), jm)
                 if qr:
-                    # every impact (also in the transient, where only overflow matters)
+                    # every impact from marks[0] on (after the window only overflow matters)
                     l1, l2 = qr_step(jm)
                     if 0 < im < nm:
                         logs[im - 1, 0] += l1
@@ -354,7 +359,7 @@ def run_engine(sp, ctl, t, x, v, buf, res):
     # the marks left (at t_end) when the run ended in flight
     if tangent and not stuck and status == _OK and im < nm:
         while im < nm and marks[im] <= t_end:
-            tq, im = _tangent_to(sp, jm, marks[im], tq, marks, logs, im, qr)
+            tq, im = _tangent_to(spt, jm, marks[im], tq, marks, logs, im, qr)
     if stuck:
         jm[:] = 0.0
     if status == _OK and 0 < cap < n_rec:
