@@ -120,7 +120,7 @@ def _hop_root(v0, a0, j0, h):
 def _newton_root(sp, seg, s, lo, hi):
     """Newton on f = x - g from s, staying in (lo, hi].  Returns (ok, root, v, a,
     evaluations); ok only if every iterate went down the wall (v < 0) and the last step
-    is at rounding level."""
+    is at rounding level, or the step after it would be (see below)."""
     g = sp[G]
     t0 = abs(seg[T0])
     n = 0
@@ -133,9 +133,15 @@ def _newton_root(sp, seg, s, lo, hi):
         s_new = s + ds
         if not (lo < s_new <= hi):
             break
-        if abs(ds) <= 4.0 * EPS * (t0 + s):
+        tol = 4.0 * EPS * (t0 + s)
+        if abs(ds) <= tol:
             # the state at the root, to first order in the last (rounding-level) step
             return True, s_new, v + a * ds, a, n
+        if abs(a) * ds * ds <= 2e-3 * tol * -v and v + ds * (a + 0.5 * j * ds) < 0.0:
+            # Newton's next step, about a ds^2 / (2 v), would be a thousandth of the
+            # rounding level: s_new is the root to rounding without another evaluation
+            # (the state there from the Taylor polynomial at s)
+            return True, s_new, v + ds * (a + 0.5 * j * ds), a + j * ds, n
         s = s_new
     return False, s, 0.0, 0.0, n
 
