@@ -307,9 +307,10 @@ def _rows(values, order, T_of, out_t, out_v, counts, direction):
     """Row arrays (param, v, t, phase, index, direction) of runs of values[order]."""
     kept = np.minimum(counts, out_t.shape[1])
     idx = np.repeat(np.arange(len(kept)), kept)
-    mask = np.arange(out_t.shape[1])[None, :] < kept[:, None]
-    t = out_t[mask]
-    return (values[order][idx], out_v[mask], t, np.mod(t, T_of[order][idx]), order[idx],
+    # the kept prefix of each run's row of out_t (not a mask over all cap columns)
+    col = np.arange(idx.size) - np.repeat(np.cumsum(kept) - kept, kept)
+    t = out_t[idx, col]
+    return (values[order][idx], out_v[idx, col], t, np.mod(t, T_of[order][idx]), order[idx],
             np.full(idx.shape, direction, dtype=np.int8))
 
 
