@@ -20,8 +20,9 @@ from .flight import C_, CPH, FA, G, H0, HRATE, HV0, K, M, NSEG, OM, PP, QQ, RES,
 from .flight import derivative_bounds, flight_state
 
 # layout of the per-run grid array: step, the homogeneous flow over one step
-# (h, h') -> [[P11, P12], [P21, P22]] (h, h'), and the forcing's rotation by omega step
-GSTEP, P11, P12, P21, P22, GCOS, GSIN, NGRID = range(8)
+# (h, h') -> [[P11, P12], [P21, P22]] (h, h'), the forcing's rotation by omega step, and
+# the same two over a double step (the stride far from the wall)
+GSTEP, P11, P12, P21, P22, GCOS, GSIN, D11, D12, D21, D22, DCOS, DSIN, NGRID = range(14)
 #: grid step of next_impact_grid, in units of 1 / (fastest rate of the run)
 GRID_STEP = 0.5
 #: no grid when a forcing period would take more steps than this (stiff flows): the
@@ -46,8 +47,15 @@ def search_grid(sp, rate):
     unit[H0], unit[X0], unit[HV0], unit[V0] = 0.0, 0.0, 1.0, 1.0
     x, v, a, j, rh, xs = flight_state(sp, unit, h)
     grid[P12], grid[P22] = x, v
+    x, v, a, j, rh, xs = flight_state(sp, unit, 2.0 * h)
+    grid[D12], grid[D22] = x, v
+    unit[H0], unit[X0], unit[HV0], unit[V0] = 1.0, 1.0, 0.0, 0.0
+    x, v, a, j, rh, xs = flight_state(sp, unit, 2.0 * h)
+    grid[D11], grid[D21] = x, v
     grid[GCOS] = math.cos(sp[OM] * h)
     grid[GSIN] = math.sin(sp[OM] * h)
+    grid[DCOS] = math.cos(sp[OM] * 2.0 * h)
+    grid[DSIN] = math.sin(sp[OM] * 2.0 * h)
     grid[GSTEP] = h
     return grid
 
@@ -158,15 +166,21 @@ def next_impact_grid(sp, seg, s_end, hmax, max_steps, grid, s_guess):
     is certified free of the wall from the values and slopes at its ends: f = x - g
     differs from its cubic Hermite interpolant by at most M4 h^4 / 384 (M4 bounds the
     fourth derivative, flight.derivative_bounds), and the interpolant lies above the
-    least of its Bernstein coefficients f0, f0 + v0 h / 3, f1 - v1 h / 3, f1.  The first
-    interval, which starts on the wall, is certified by the cubic lower bounds of the
-    module docstring from both of its ends (checked by their Bernstein coefficients).  At the first interval not certified, the
+    least of its Bernstein coefficients f0, f0 + v0 h / 3, f1 - v1 h / 3, f1.  Far from
+    the wall the grid strides two steps at a time, each double interval certified the
+    same way (its bound 16 times the single step's), until the first that is not.  The
+    first interval, which starts on the wall, is certified by the cubic lower bounds of
+    events.py from both of its ends (checked by their Bernstein coefficients).  A hop
+    from the wall landing inside that first interval (chatter) is found by Newton from
+    the root of its Taylor cubic and certified by the cubic bounds forward from the wall
+    and backward from the root.  At the first interval not certified, the
     root is sought by Newton on the closed form from ``s_guess`` (the caller's
     prediction, e.g. the hop of a periodic orbit) or from the interpolant's root, and
     accepted only if the cubic lower bounds from the interval's start and, backwards,
     from the root cover the gap between them (so no earlier root).  Otherwise (grazing
-    dips, the segment's end, no grid) the search is :func:`next_impact`'s certified walk.  Rounding of the recurrence is bounded generously (32 eps of the
-    terms' size per step) and subtracted.  Returns as next_impact.
+    dips, the segment's end, no grid) the search is :func:`next_impact`'s certified walk.
+    Rounding of the recurrence is bounded generously (32 eps of the terms' size per
+    step) and subtracted.  Returns as next_impact.
     """
     h = grid[GSTEP]
     g = sp[G]
@@ -200,7 +214,29 @@ def next_impact_grid(sp, seg, s_end, hmax, max_steps, grid, s_guess):
     f1 = fs
     v1 = vs
     hh1, hd1, cph1, sph1 = hh, hd, cph, sph
+    # far from the wall the grid strides two steps at a time, certified by the same
+    # bound for a double step (16 herm); from the first double step not certified on,
+    # single steps
+    stride = True
+    herm2 = 16.0 * herm
+    h23 = 2.0 * h3
     while True:
+        if stride and n > 0:
+            s2 = s + 2.0 * h
+            if s2 < s_end:
+                hh2 = grid[D11] * hh + grid[D12] * hd
+                hd2 = grid[D21] * hh + grid[D22] * hd
+                cph2 = cph * grid[DCOS] - sph * grid[DSIN]
+                sph2 = sph * grid[DCOS] + cph * grid[DSIN]
+                f2 = hh2 + pp * cph2 + qq * sph2 - g
+                v2 = hd2 + om * (qq * cph2 - pp * sph2)
+                if min(min(fs, fs + vs * h23), min(f2 - v2 * h23, f2)) > herm2 + rnd_step * (nodes + 1.0):
+                    n += 1
+                    nodes += 1.0
+                    s = s2
+                    hh, hd, cph, sph, fs, vs = hh2, hd2, cph2, sph2, f2, v2
+                    continue
+            stride = False
         s1 = s + h
         if s1 >= s_end:
             break
