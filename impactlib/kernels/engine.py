@@ -10,7 +10,11 @@ The tangent (flow Jacobians between events, saltation matrices at impacts, zero 
 sticking; :mod:`impactlib.tangent`) is carried when ctl[TANGENT] is JACOBIAN (J of the
 final state with respect to the start) or QR_MARKS (J re-orthonormalised after every
 impact and at the sorted times ``marks``; log|R11|, log|R22| between marks[i] and
-marks[i + 1] summed in logs[i], J restarting as the identity at marks[0]).
+marks[i + 1] summed in logs[i], J restarting as the identity at marks[0]) or LEADING
+(the same logs from J's first column alone, rescaled by powers of 2 where it grows or
+shrinks far, and |det J|, which is exp(-2 c/m) per time and r^2 per impact: no QR step
+per impact; for the largest exponent of one window, where QR_MARKS's other bookkeeping
+is not needed).
 
 Numba counts references to arrays with atomic operations in every kernel taking arrays
 that calls another kernel or stores in a branch; per impact they cost about as much as
@@ -31,10 +35,11 @@ from .events import IMPACT, STEP_LIMIT
 from .grid import NGRID, next_impact_grid, search_grid
 from numba.np.unsafe.ndarray import to_fixed_tuple
 
-from .flight import G, NSP, R, flight_state, make_segment, release_time
+from .flight import ALPHA, G, NSP, R, flight_state, make_segment, release_time
 from .integrators import advance_rk4, advance_rk45
 from ..model import RunStatus
-from .tangent import flow_jacobian, qr_step, saltation, tangent_product
+from .tangent import (column_scale, flow_jacobian, leading_logs, qr_step, saltation,
+                      tangent_product)
 
 HOP_MEMORY = 8           # hops remembered for predicting the next one
 HOP_MATCH_RTOL = 1e-3    # ... if it left the wall this close in speed
@@ -44,7 +49,7 @@ TAIL_TOL = 1e-6          # a chatter is summed at the latest once one hop lasts 
 METHOD_IDS = {"exact": 0, "rk4": 1, "rk45": 2}
 EXACT, RK4, RK45 = 0, 1, 2
 #: tangent modes (ctl[TANGENT])
-NO_TANGENT, JACOBIAN, QR_MARKS = 0, 1, 2
+NO_TANGENT, JACOBIAN, QR_MARKS, LEADING = 0, 1, 2, 3
 
 # run controls layout (ctl)
 T_END, T_RECORD, HMAX, RATE, DT, RTOL, ATOL, MAX_IMPACTS, MAX_STEPS, METHOD, TANGENT, NCTL = range(12)
@@ -133,22 +138,40 @@ def _next_report(t, t_end, pc_t, ip, d_t, idn, marks, im):
 
 
 @jit
-def _tangent_to(sp, jm, t_to, tq, marks, logs, im, qr):
-    """Advance the tangent jm (4,) from tq to t_to through the marks on the way."""
+def _tangent_to(sp, jm, t_to, tq, marks, logs, im, tmode, scaled, n_marked, n_at_mark):
+    """Advance the tangent jm (4,) from tq to t_to through the marks on the way; returns
+    (t_to, im, scaled, n_at_mark): LEADING's scale taken out of the leading column and the
+    impact count at the last mark."""
     nm = marks.shape[0]
     while im < nm and marks[im] <= t_to:
         tangent_product(flow_jacobian(sp, marks[im] - tq), jm)
         tq = marks[im]
-        if qr:
+        if tmode == QR_MARKS:
             if im == 0:
                 jm[0], jm[1], jm[2], jm[3] = 1.0, 0.0, 0.0, 1.0
             else:
                 l1, l2 = qr_step(jm)
                 logs[im - 1, 0] += l1
                 logs[im - 1, 1] += l2
+        elif tmode == LEADING:
+            if im > 0:
+                log_det = -2.0 * sp[ALPHA] * (marks[im] - marks[im - 1])
+                if n_marked > n_at_mark:
+                    log_det += (n_marked - n_at_mark) * 2.0 * math.log(sp[R])
+                l1, l2 = leading_logs(jm[0], jm[2], scaled, log_det)
+                logs[im - 1, 0] += l1
+                logs[im - 1, 1] += l2
+            n = math.hypot(jm[0], jm[2])
+            if im == 0 or n == 0.0:
+                jm[0], jm[2] = 1.0, 0.0
+            else:
+                jm[0], jm[2] = jm[0] / n, jm[2] / n
+            jm[1], jm[3] = 0.0, 0.0
+            scaled = 0.0
+            n_at_mark = n_marked
         im += 1
     tangent_product(flow_jacobian(sp, t_to - tq), jm)
-    return t_to, im
+    return t_to, im, scaled, n_at_mark
 
 
 @jit
@@ -174,6 +197,11 @@ def run_engine(sp, ctl, t, x, v, buf, res):
     tmode = int(ctl[TANGENT])
     tangent = tmode != NO_TANGENT
     qr = tmode == QR_MARKS
+    lead = tmode == LEADING
+    # QR_MARKS and LEADING restart the tangent at marks[0]: none is carried before
+    marked = qr or lead
+    scaled = 0.0      # LEADING: log2 of the scale taken out of the leading column
+    n_at_mark = 0     # LEADING: impacts after marks[0] at the last mark
     pc_t, pc_x, pc_v = buf.pc_t, buf.pc_x, buf.pc_v
     d_t, d_x, d_v = buf.d_t, buf.d_x, buf.d_v
     stick = buf.stick
@@ -248,6 +276,8 @@ def run_engine(sp, ctl, t, x, v, buf, res):
                 if qr and im == 0:
                     jm[0], jm[1], jm[2], jm[3] = 1.0, 0.0, 0.0, 1.0
                 im += 1
+                scaled = 0.0
+                n_at_mark = n_marked
             jm[:] = 0.0
             tq = te
             if tr >= t_end:
@@ -301,9 +331,9 @@ def run_engine(sp, ctl, t, x, v, buf, res):
         nsteps += ns
         if tangent:
             if im < nm and marks[im] <= th:
-                tq, im = _tangent_to(spt, jm, th, tq, marks, logs, im, qr)
-            elif not (qr and im == 0 and nm > 0):
-                # (with QR marks the tangent restarts at marks[0]: none is carried before)
+                tq, im, scaled, n_at_mark = _tangent_to(spt, jm, th, tq, marks, logs, im, tmode,
+                                                        scaled, n_marked, n_at_mark)
+            elif not (marked and im == 0 and nm > 0):
                 tangent_product(flow_jacobian(spt, th - tq), jm)
                 tq = th
         if kind != IMPACT:
@@ -327,7 +357,7 @@ def run_engine(sp, ctl, t, x, v, buf, res):
             if t >= t_mark0:
                 n_marked += 1
                 vmin = min(vmin, -vh)
-            if tangent and not (qr and im == 0 and nm > 0):
+            if tangent and not (marked and im == 0 and nm > 0):
                 tangent_product(saltation(spt, t, vh), jm)
                 if qr:
                     # every impact from marks[0] on (after the window only overflow matters)
@@ -335,6 +365,12 @@ def run_engine(sp, ctl, t, x, v, buf, res):
                     if 0 < im < nm:
                         logs[im - 1, 0] += l1
                         logs[im - 1, 1] += l2
+                elif lead:
+                    k, scale = column_scale(jm[0], jm[2])
+                    if k != 0.0:
+                        jm[0] *= scale
+                        jm[2] *= scale
+                        scaled += k
         vplus = -r * vh
         if vplus <= 0.0:
             vplus = 0.0
@@ -359,7 +395,8 @@ def run_engine(sp, ctl, t, x, v, buf, res):
     # the marks left (at t_end) when the run ended in flight
     if tangent and not stuck and status == _OK and im < nm:
         while im < nm and marks[im] <= t_end:
-            tq, im = _tangent_to(spt, jm, marks[im], tq, marks, logs, im, qr)
+            tq, im, scaled, n_at_mark = _tangent_to(spt, jm, marks[im], tq, marks, logs, im,
+                                                    tmode, scaled, n_marked, n_at_mark)
     if stuck:
         jm[:] = 0.0
     if status == _OK and 0 < cap < n_rec:

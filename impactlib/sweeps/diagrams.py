@@ -537,7 +537,8 @@ def lyapunov_sweep_kernel(sps, x0s, v0, t_end, t_record, hmaxs, rates, out_t, ou
                           status, finals, lyap, warm, max_impacts, max_steps):
     """sweep_kernel (exact method, no classification) with the tangent carried
     along by the engine: lyap[i] = (sum log|R11|, sum log|R22|, stuck in window, impacts in window)
-    of value i over its window [t0 + t_record, t0 + t_end]."""
+    of value i over its window [t0 + t_record, t0 + t_end] (the sums from the leading
+    column, engine.LEADING)."""
     nvals = sps.shape[0]
     marks = np.empty(2)
     logs = np.zeros((1, 2))
@@ -561,7 +562,7 @@ def lyapunov_sweep_kernel(sps, x0s, v0, t_end, t_record, hmaxs, rates, out_t, ou
         logs[0, 0] = 0.0
         logs[0, 1] = 0.0
         ctl = E.controls(t0 + t_end, t0 + t_record, hmaxs[i], rates[i], 0.0, 0.0, 0.0,
-                         max_impacts, max_steps, E.EXACT, E.QR_MARKS)
+                         max_impacts, max_steps, E.EXACT, E.LEADING)
         buf = Buffers(out_t[i], out_v[i], stick, none, none, none, none, none, none, marks,
                       logs)
         st = E.run_engine(sp, ctl, t0, x, v, buf, res)
