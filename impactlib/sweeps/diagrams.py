@@ -265,6 +265,8 @@ def _run_rows(sps, hmaxs, rates, method, x0s, v0, t_end, t_record, dt, rtol, ato
 
 #: output held by one block of jobs (impacts kept x jobs): bounds a block's size
 BLOCK_OUTPUT = 1 << 18
+
+
 def run_jobs(sps, hmaxs, rates, x0s, v0s, *, method, t_end, t_record, dt, rtol, atol,
              classify, cap, max_impacts, max_steps, on_block, workers=None, cancel=None,
              order=None) -> int:
