@@ -29,12 +29,10 @@ from collections import namedtuple
 
 import numpy as np
 
-from ._jit import jit
+from ._jit import as_tuple, jit
 from .chatter import STICK, impact_outcome
 from .events import IMPACT, STEP_LIMIT
 from .grid import NGRID, next_impact_grid, search_grid
-from numba.np.unsafe.ndarray import to_fixed_tuple
-
 from .flight import ALPHA, G, NSP, R, flight_state, make_segment, release_time
 from .integrators import advance_rk4, advance_rk45
 from ..model import RunStatus
@@ -232,8 +230,8 @@ def run_engine(sp, ctl, t, x, v, buf, res):
     grid = search_grid(sp, rate) if method == EXACT else np.zeros(NGRID)
     # the constants, the grid and each segment as tuples in the exact method's loop
     # (flight.py): no reference counting per impact
-    spt = to_fixed_tuple(sp, NSP)
-    gridt = to_fixed_tuple(grid, NGRID)
+    spt = as_tuple(sp, NSP)
+    gridt = as_tuple(grid, NGRID)
     # the last hops (rebound speed, length): a hop that left the wall as fast as this one
     # predicts its length (periodic orbits repeat them)
     hop_v = np.full(HOP_MEMORY, -1.0)

@@ -19,9 +19,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba.cpython.unsafe.tuple import tuple_setitem
 
-from ._jit import jit
+from ._jit import jit, with_item
 from .flight import (ALPHA, C_, CPH, FA, G, H0, HV0, K, M, OM, RES, SPH, T0, V0, W0SQ, X0,
                      derivative_bounds, flight_state, motion_bounds)
 
@@ -315,14 +314,14 @@ def short_hop(sp, seg, s_end):
     if not (tau < s_end and rem * tau ** (n + 1) <= 4.0 * EPS * u * (abs(seg[T0]) + tau)):
         return False, 0.0, 0.0
     # Taylor coefficients a[j] = x^(j) / j! of f at the start (a[0] = 0)
-    # coefficients in tuples (tuple_setitem): no array allocated per hop
-    e = tuple_setitem(tuple_setitem(_ZEROS, 0, x0), 1, u)
+    # coefficients in tuples (with_item): no array allocated per hop
+    e = with_item(with_item(_ZEROS, 0, x0), 1, u)
     fj = 1.0
     for j in range(n - 1):
         # j-th derivative of cos(omega t): omega^j (cos, -sin, -cos, sin)[j mod 4]
         r4 = j % 4
         trig = cph if r4 == 0 else (-sph if r4 == 1 else (-cph if r4 == 2 else sph))
-        e = tuple_setitem(e, j + 2, (fj * trig - 2.0 * c * e[j + 1] - k * e[j]) / m)
+        e = with_item(e, j + 2, (fj * trig - 2.0 * c * e[j + 1] - k * e[j]) / m)
         fj *= om
     if not e[2] < 0.0:
         return False, 0.0, 0.0
@@ -330,7 +329,7 @@ def short_hop(sp, seg, s_end):
     fj = 1.0
     for j in range(1, n + 1):
         fj *= j
-        a = tuple_setitem(a, j, e[j] / fj)
+        a = with_item(a, j, e[j] / fj)
     # tau_lo: Newton on q(tau) = (p - rem tau^(n+1)) / tau from the parabola's root
     tau_lo = tau_hi = 0.0
     for sign in (-1.0, 1.0):
@@ -360,9 +359,9 @@ def short_hop(sp, seg, s_end):
     cc = _ZEROS
     p = 1.0
     for i in range(n):
-        cc = tuple_setitem(cc, i, a[i + 1] * p)
+        cc = with_item(cc, i, a[i + 1] * p)
         p *= tau_lo
-    cc = tuple_setitem(cc, n, -rem * p)
+    cc = with_item(cc, n, -rem * p)
     binom_n = 1.0
     for i in range(n + 1):
         # b_i = sum_{j <= i} C(i, j) / C(n, j) c_j
