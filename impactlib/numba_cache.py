@@ -40,11 +40,12 @@ def user_cache_dir() -> Path:
 
 
 def sources_hash(package_dir: Path = PACKAGE_DIR) -> str:
-    """A hash of every module of the package that defines a jitted function."""
+    """A hash of every module of the package that defines a jitted function or an
+    overload (a function jitted code calls)."""
     h = hashlib.sha1()
     for path in sorted(package_dir.rglob("*.py")):
         text = path.read_bytes()
-        if b"@jit" in text:
+        if b"@jit" in text or b"@overload" in text:
             h.update(path.relative_to(package_dir).as_posix().encode() + b"\0" + text)
     return h.hexdigest()[:16]
 

@@ -80,6 +80,17 @@ def run_tasks(fn, args_list, workers):
             f.cancel()
 
 
+#: jobs are taken in strides of this many, so neighbouring (similarly costly) values
+#: spread over the blocks
+INTERLEAVE = 16
+
+
+def interleaved(n: int, stride: int = INTERLEAVE) -> np.ndarray:
+    """0, s, 2s, ..., 1, 1 + s, ...: an order of n jobs in which every stretch samples
+    the whole range."""
+    return np.concatenate([np.arange(j, n, stride) for j in range(min(stride, n))])
+
+
 def run_blocks(n: int, run_block, *, order: np.ndarray, max_block: int, workers=None,
                cancel=None) -> int:
     """Run n jobs as blocks: run_block(idx) for blocks idx of ``order``, on ``workers``

@@ -178,19 +178,21 @@ def classify_measured(sol, rtol: float = PERIOD_RTOL, max_period: int = MAX_PERI
     return judge_motion(describe(m, n), sol, max_period)
 
 
-def judge_motion(motion: Motion, sol, max_period: int = MAX_PERIOD):
+def judge_motion(motion: Motion, sol, max_period: int = MAX_PERIOD, measured=None):
     """(Motion, Lyapunov or None): the verdict on ``motion``, the class the maps of
     ``sol`` give, measured where they find no period.  ``sol`` is a Solution, or any
     record of the same run with its params, method, t_record, t_end, final, n_impacts,
     nsteps and (read without dissipation only) impacts: a sweep that ran it judges from
-    its own outputs instead of running it again."""
+    its own outputs instead of running it again.  ``measured`` is
+    :func:`measure_lyapunov`'s result for ``sol`` where the caller has made it (a sweep
+    measures its cells in one jitted loop)."""
     if motion.kind != "chaotic":
         return motion, None
     if no_dissipation(sol.params) and grows_without_bound(sol.impacts.t, sol.impacts.v,
                                                           sol.t_record, sol.t_end):
         return Motion(math.nan, math.nan, "unbounded",
                       "unbounded (no dissipation): the impact speed grows every cycle"), None
-    ly = measure_lyapunov(sol)
+    ly = measure_lyapunov(sol) if measured is None else measured
     return _judged(sol, motion, ly, max_period), ly
 
 

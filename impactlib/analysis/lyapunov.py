@@ -25,6 +25,8 @@ import numpy as np
 
 from ..model import Params, RunLimits, RunStatus, check_run
 from ..kernels import engine as E
+from ..kernels._jit import jit
+from ..kernels.entry import run_constants as entry_run_constants
 from ..simulate import run_constants
 from ..io.result import Result
 
@@ -156,6 +158,13 @@ def lyapunov_from(p, t0, x0, v0, t_end, t_record, windows=WINDOWS,
     """:func:`lyapunov` from time t0 (inputs already validated), within ``limits``."""
     logs, marks, status, stuck, n_m, imp_t, imp_v, final = lyapunov_run(
         p, t0, x0, v0, t_end, t_record, windows, limits=limits)
+    return lyapunov_result(p, t_end, t_record, logs, marks, status, stuck, n_m, imp_t, imp_v,
+                           final)
+
+
+def lyapunov_result(p, t_end, t_record, logs, marks, status, stuck, n_m, imp_t, imp_v,
+                    final) -> Lyapunov:
+    """The :class:`Lyapunov` result of a run's outputs (:func:`lyapunov_run`'s)."""
     tau = t_end - t_record
     nu = n_m / tau
     unbounded = no_dissipation(p) and grows_without_bound(imp_t, imp_v, t_record, t_end)
@@ -185,3 +194,30 @@ def lyapunov_from(p, t0, x0, v0, t_end, t_record, windows=WINDOWS,
     return Lyapunov(params=p, exponents=exps, error=err, n_impacts=int(n_m), nu=nu,
                     window=(t_record, t_end), sticks=stuck, unbounded=bool(unbounded),
                     status=RunStatus(int(status)), message=msg, final=final)
+
+
+@jit
+def lyapunov_rows(rows, starts, t_ends, t_records, limits, marks, logs, out):
+    """:func:`lyapunov_run` for many runs in one jitted loop, impacts not kept: run i of
+    the parameters rows[i] = (m, c, k, g, r, omega) from starts[i] = (t0, x0, v0) over
+    [t_records[i], t_ends[i]] within limits[i] = (max_impacts, max_steps), with the marks
+    marks[i] (windows + 1); fills logs[i] (windows, 2) and out[i] = (status, stuck in the
+    window, impacts in it, t, x, v, stuck at the end)."""
+    none = np.empty(0)
+    stick = np.empty((0, 2))
+    res = np.empty(E.NRES)
+    for i in range(rows.shape[0]):
+        sp, rate, hmax = entry_run_constants(rows[i, 0], rows[i, 1], rows[i, 2], rows[i, 3],
+                                             rows[i, 4], rows[i, 5])
+        ctl = E.controls(t_ends[i], t_records[i], hmax, rate, 0.0, 0.0, 0.0, limits[i, 0],
+                         limits[i, 1], E.EXACT, E.QR_MARKS)
+        status = E.run_engine(sp, ctl, starts[i, 0], starts[i, 1], starts[i, 2],
+                              E.Buffers(none, none, stick, none, none, none, none, none, none,
+                                        marks[i], logs[i]), res)
+        out[i, 0] = status
+        out[i, 1] = res[E.STUCK_MARKED]
+        out[i, 2] = res[E.N_MARKED]
+        out[i, 3] = res[E.T_F]
+        out[i, 4] = res[E.X_F]
+        out[i, 5] = res[E.V_F]
+        out[i, 6] = res[E.STUCK]

@@ -20,9 +20,9 @@ import math
 
 import numpy as np
 
-from ._jit import jit
-from .flight import (ALPHA, C_, CPH, FA, G, H0, HV0, K, M, NSEG, OM, PP, QQ, R, RES, SPH, T0, V0,
-                     W0SQ, X0, derivative_bounds, flight_state, motion_bounds)
+from ._jit import jit, with_item
+from .flight import (ALPHA, C_, CPH, FA, G, H0, HV0, K, M, OM, RES, SPH, T0, V0, W0SQ, X0,
+                     derivative_bounds, flight_state, motion_bounds)
 
 EPS = 2.220446049250313e-16
 #: Longest certified step, in forcing periods.  At exact resonance the bound on the
@@ -260,6 +260,7 @@ def search_from(sp, seg, s, x, v, a, rh, xs, s_end, hmax, max_steps, nsteps):
 
 #: degree of the Taylor polynomial of a short hop (short_hop)
 SHORT_HOP_ORDER = 8
+_ZEROS = (0.0,) * (SHORT_HOP_ORDER + 1)
 
 
 @jit
@@ -313,24 +314,22 @@ def short_hop(sp, seg, s_end):
     if not (tau < s_end and rem * tau ** (n + 1) <= 4.0 * EPS * u * (abs(seg[T0]) + tau)):
         return False, 0.0, 0.0
     # Taylor coefficients a[j] = x^(j) / j! of f at the start (a[0] = 0)
-    e = np.empty(n + 1)
-    e[0] = x0
-    e[1] = u
+    # coefficients in tuples (with_item): no array allocated per hop
+    e = with_item(with_item(_ZEROS, 0, x0), 1, u)
     fj = 1.0
     for j in range(n - 1):
         # j-th derivative of cos(omega t): omega^j (cos, -sin, -cos, sin)[j mod 4]
         r4 = j % 4
         trig = cph if r4 == 0 else (-sph if r4 == 1 else (-cph if r4 == 2 else sph))
-        e[j + 2] = (fj * trig - 2.0 * c * e[j + 1] - k * e[j]) / m
+        e = with_item(e, j + 2, (fj * trig - 2.0 * c * e[j + 1] - k * e[j]) / m)
         fj *= om
     if not e[2] < 0.0:
         return False, 0.0, 0.0
-    a = np.empty(n + 1)
-    a[0] = 0.0
+    a = _ZEROS
     fj = 1.0
     for j in range(1, n + 1):
         fj *= j
-        a[j] = e[j] / fj
+        a = with_item(a, j, e[j] / fj)
     # tau_lo: Newton on q(tau) = (p - rem tau^(n+1)) / tau from the parabola's root
     tau_lo = tau_hi = 0.0
     for sign in (-1.0, 1.0):
@@ -357,12 +356,12 @@ def short_hop(sp, seg, s_end):
         return False, 0.0, 0.0
     # no earlier root: Bernstein coefficients of q_lo on [0, tau_lo] all positive
     # (coefficients c_i = a_(i+1) tau_lo^i, c_n = -rem tau_lo^n; degree n polynomial)
-    cc = np.empty(n + 1)
+    cc = _ZEROS
     p = 1.0
     for i in range(n):
-        cc[i] = a[i + 1] * p
+        cc = with_item(cc, i, a[i + 1] * p)
         p *= tau_lo
-    cc[n] = -rem * p
+    cc = with_item(cc, n, -rem * p)
     binom_n = 1.0
     for i in range(n + 1):
         # b_i = sum_{j <= i} C(i, j) / C(n, j) c_j
@@ -385,216 +384,6 @@ def short_hop(sp, seg, s_end):
     return True, tr, v
 
 
-# ------------------------------------------------------------ the grid search
-
-# layout of the per-run grid array: step, the homogeneous flow over one step
-# (h, h') -> [[P11, P12], [P21, P22]] (h, h'), and the forcing's rotation by omega step
-GSTEP, P11, P12, P21, P22, GCOS, GSIN, NGRID = range(8)
-#: grid step of next_impact_grid, in units of 1 / (fastest rate of the run)
-GRID_STEP = 0.5
-#: no grid when a forcing period would take more steps than this (stiff flows): the
-#: certified search's steps adapt to the decaying transient, a fixed grid cannot
-GRID_MAX_STEPS_PER_PERIOD = 256.0
-
-
-@jit
-def search_grid(sp, rate):
-    """The grid of :func:`next_impact_grid` for one run (an array of NGRID floats);
-    grid[GSTEP] = 0 where no grid is used (resonance, k = 0, stiff flows)."""
-    grid = np.zeros(NGRID)
-    h = GRID_STEP / rate
-    if sp[RES] != 0.0 or sp[W0SQ] <= 0.0 or 2.0 * math.pi / sp[OM] > GRID_MAX_STEPS_PER_PERIOD * h:
-        return grid
-    # the transition matrix: homogeneous solutions from (1, 0) and (0, 1), no forcing
-    unit = np.zeros(NSEG)
-    unit[H0] = 1.0
-    unit[X0] = 1.0
-    x, v, a, j, rh, xs = flight_state(sp, unit, h)
-    grid[P11], grid[P21] = x, v
-    unit[H0], unit[X0], unit[HV0], unit[V0] = 0.0, 0.0, 1.0, 1.0
-    x, v, a, j, rh, xs = flight_state(sp, unit, h)
-    grid[P12], grid[P22] = x, v
-    grid[GCOS] = math.cos(sp[OM] * h)
-    grid[GSIN] = math.sin(sp[OM] * h)
-    grid[GSTEP] = h
-    return grid
-
-
-@jit
-def _clear_of_root(v, a, m3):
-    """T such that v tau + a tau^2 / 2 - m3 tau^3 / 6 > 0 on (0, T), for v > 0: the
-    positive root of v + a tau / 2 - m3 tau^2 / 6 (cancellation-free form), less a
-    relative 1e-12."""
-    m3 = max(m3, 1e-300)
-    d = math.sqrt(0.25 * a * a + 2.0 * m3 * v / 3.0)
-    t = (0.5 * a + d) / (m3 / 3.0) if a >= 0.0 else 2.0 * v / (d - 0.5 * a)
-    return t * (1.0 - 1e-12)
-
-
-@jit
-def _cubic_positive(f, v, a, m3, T):
-    """True if f + v tau + a tau^2 / 2 - m3 tau^3 / 6 > 0 on [0, T]: all its Bernstein
-    coefficients on [0, T] are (a sufficient test, no root finding)."""
-    vt = v * T
-    at = a * T * T
-    return (f > 0.0 and f + vt / 3.0 > 0.0 and f + 2.0 * vt / 3.0 + at / 6.0 > 0.0
-            and f + vt + 0.5 * at - m3 * T * T * T / 6.0 > 0.0)
-
-
-@jit
-def _hermite_root(fa, va, fb, vb, h):
-    """Approximate root in (0, h) of the cubic Hermite interpolant of (fa, va) at 0 and
-    (fb, vb) at h, fa > 0 >= fb: a starting guess only (Newton on the closed form
-    follows), from the secant root and three Newton steps on the cubic."""
-    c1 = va * h
-    c2 = -3.0 * fa - 2.0 * va * h + 3.0 * fb - vb * h
-    c3 = 2.0 * fa + va * h - 2.0 * fb + vb * h
-    th = fa / (fa - fb)
-    for _ in range(3):
-        d = c1 + th * (2.0 * c2 + 3.0 * th * c3)
-        if d >= 0.0:
-            break
-        th_new = th - (fa + th * (c1 + th * (c2 + th * c3))) / d
-        if not (0.0 < th_new < 1.0):
-            break
-        th = th_new
-    return th * h
-
-
-@jit
-def _newton_root(sp, seg, s, lo, hi):
-    """Newton on f = x - g from s, staying in (lo, hi].  Returns (ok, root, v, a,
-    evaluations); ok only if every iterate went down the wall (v < 0) and the last step
-    is at rounding level."""
-    g = sp[G]
-    t0 = abs(seg[T0])
-    n = 0
-    for _ in range(8):
-        x, v, a, j, rh, xs = flight_state(sp, seg, s)
-        n += 1
-        if not v < 0.0:
-            break
-        ds = -(x - g) / v
-        s_new = s + ds
-        if not (lo < s_new <= hi):
-            break
-        if abs(ds) <= 4.0 * EPS * (t0 + s):
-            # the state at the root, to first order in the last (rounding-level) step
-            return True, s_new, v + a * ds, a, n
-        s = s_new
-    return False, s, 0.0, 0.0, n
-
-
-@jit
-def next_impact_grid(sp, seg, s_end, hmax, max_steps, grid, s_guess):
-    """:func:`next_impact` with fewer closed-form evaluations and the same guarantee.
-
-    A hop from the wall short enough for its Taylor polynomial to fix the root to
-    rounding (chatter) is taken by :func:`short_hop`, without closed-form evaluation.
-
-    The flight is advanced on a fixed grid by its exact linear recurrence (``grid``,
-    from :func:`search_grid`): no transcendental function per node.  Each grid interval
-    is certified free of the wall from the values and slopes at its ends: f = x - g
-    differs from its cubic Hermite interpolant by at most M4 h^4 / 384 (M4 bounds the
-    fourth derivative, flight.derivative_bounds), and the interpolant lies above the
-    least of its Bernstein coefficients f0, f0 + v0 h / 3, f1 - v1 h / 3, f1.  The first
-    interval, which starts on the wall, is certified by the cubic lower bounds of the
-    module docstring from both of its ends (checked by their Bernstein coefficients).  At the first interval not certified, the
-    root is sought by Newton on the closed form from ``s_guess`` (the caller's
-    prediction, e.g. the hop of a periodic orbit) or from the interpolant's root, and
-    accepted only if the cubic lower bounds from the interval's start and, backwards,
-    from the root cover the gap between them (so no earlier root).  Otherwise (grazing
-    dips, the segment's end, no grid) the search is :func:`next_impact`'s certified walk.  Rounding of the recurrence is bounded generously (32 eps of the
-    terms' size per step) and subtracted.  Returns as next_impact.
-    """
-    h = grid[GSTEP]
-    g = sp[G]
-    x0 = seg[X0]
-    v0 = seg[V0]
-    if x0 == g and v0 > 0.0:
-        ok, s, v = short_hop(sp, seg, s_end)
-        if ok:
-            return IMPACT, s, v, 0
-    if h <= 0.0 or (x0 - g <= 0.0 and v0 <= 0.0):
-        return next_impact(sp, seg, s_end, hmax, max_steps)
-    om, pp, qq = sp[OM], sp[PP], sp[QQ]
-    m, c, k = sp[M], sp[C_], sp[K]
-    w0sq = sp[W0SQ]
-    hh, hd = seg[H0], seg[HV0]
-    cph, sph = seg[CPH], seg[SPH]
-    rh0 = math.sqrt(hd * hd + w0sq * hh * hh)
-    m3, m4 = derivative_bounds(sp, rh0, s_end, x0, v0, s_end)
-    herm = m4 * (h * h) * (h * h) / 384.0
-    # size of the terms summed at a node (|h| <= rh0 / w0, |x_p| <= FA), for rounding
-    size = rh0 / math.sqrt(w0sq) + rh0 + sp[FA] * (1.0 + om) + abs(g) + abs(x0)
-    fs, vs = x0 - g, v0
-    as_ = (cph - 2.0 * c * v0 - k * x0) / m
-    s = 0.0
-    n = 0
-    f1 = fs
-    v1 = vs
-    hh1, hd1, cph1, sph1 = hh, hd, cph, sph
-    while True:
-        s1 = s + h
-        if s1 >= s_end:
-            break
-        hh1 = grid[P11] * hh + grid[P12] * hd
-        hd1 = grid[P21] * hh + grid[P22] * hd
-        cph1 = cph * grid[GCOS] - sph * grid[GSIN]
-        sph1 = sph * grid[GCOS] + cph * grid[GSIN]
-        f1 = hh1 + pp * cph1 + qq * sph1 - g
-        v1 = hd1 + om * (qq * cph1 - pp * sph1)
-        n += 1
-        rnd = 32.0 * EPS * (n + 1) * size
-        if n == 1:
-            # starts on the wall: forward cubic bound from 0, backward from h
-            a1 = (cph1 - 2.0 * c * v1 - k * (f1 + g)) / m
-            tf = _clear_of_root(vs, as_, m3) if vs > 0.0 else 0.0
-            ok = f1 - rnd > 0.0 and (tf >= h or _cubic_positive(f1 - rnd, -v1, a1, m3, h - tf))
-        else:
-            ok = min(min(fs, fs + vs * h / 3.0), min(f1 - v1 * h / 3.0, f1)) > herm + rnd
-        if not ok:
-            break
-        s = s1
-        hh, hd, cph, sph, fs, vs = hh1, hd1, cph1, sph1, f1, v1
-    # [s, s + h] is not certified (or passes s_end): the wall is near
-    evals = 0
-    if s > 0.0 and s + h < s_end:
-        lo = s
-        hi = s + h
-        guess = -1.0
-        if f1 <= 0.0:
-            if not lo < s_guess <= hi:
-                guess = s + _hermite_root(fs, vs, f1, v1, h)
-        elif s + 2.0 * h < s_end:
-            # the crossing may lie just past the node: look one interval further
-            hh2 = grid[P11] * hh1 + grid[P12] * hd1
-            hd2 = grid[P21] * hh1 + grid[P22] * hd1
-            cph2 = cph1 * grid[GCOS] - sph1 * grid[GSIN]
-            sph2 = sph1 * grid[GCOS] + cph1 * grid[GSIN]
-            f2 = hh2 + pp * cph2 + qq * sph2 - g
-            v2 = hd2 + om * (qq * cph2 - pp * sph2)
-            hi = s + 2.0 * h
-            if f2 <= 0.0 and not lo < s_guess <= hi:
-                guess = s + h + _hermite_root(f1, v1, f2, v2, h)
-        if lo < s_guess <= hi:
-            guess = s_guess
-        if guess > 0.0:
-            ok, r, vr, ar, ne = _newton_root(sp, seg, guess, lo, hi)
-            evals += ne
-            if ok:
-                as_ = (cph - 2.0 * c * vs - k * (fs + g)) / m
-                gap = r - s
-                rnd = 32.0 * EPS * (n + 1) * size
-                tb = _clear_of_root(-vr, ar, m3)
-                if tb >= gap or _cubic_positive(fs - rnd, vs, as_, m3, gap - tb):
-                    return IMPACT, r, vr, evals
-    # the certified walk, from the start: where it is needed (grazing dips, the run's
-    # end, chatter) its steps are few, and its results are those of next_impact exactly
-    kind, sr, vr, ns = next_impact(sp, seg, s_end, hmax, max_steps - evals)
-    return kind, sr, vr, ns + evals
-
-
 @jit
 def phase_of(t, om):
     """t mod T, T = 2 pi / omega, in [0, T)."""
@@ -605,4 +394,4 @@ def phase_of(t, om):
     return ph
 
 
-__all__ = ["safe_step", "next_impact", "next_impact_grid", "search_from", "search_grid", "short_hop", "phase_of", "step_caps", "step_cap", "OM"]
+__all__ = ["safe_step", "next_impact", "search_from", "short_hop", "phase_of", "step_caps", "step_cap", "OM"]

@@ -18,7 +18,10 @@ t sin(wt) / (2 m w).  Each flight segment stores the forcing relative to its own
 (angle addition), so its phase and, at resonance, its secular term stay small.
 
 System constants live in a float64 array ``sp`` and a segment in ``seg``; the index
-names below are their layout.
+names below are their layout.  Kernels only read them by index, so either may also be a
+tuple of that layout: the engine passes tuples (:func:`make_segment`), which Numba
+passes by value, where an array argument costs atomic reference counting on every call
+of a kernel that calls another.
 """
 from __future__ import annotations
 
@@ -98,31 +101,34 @@ def fastest_rate(sp):
 
 @jit
 def start_segment(sp, t0, x0, v0):
-    """Segment of free flight from state (x0, v0) at time t0."""
+    """Segment of free flight from state (x0, v0) at time t0, as a new array."""
+    vals = make_segment(sp, t0, x0, v0)
     seg = np.empty(NSEG)
+    for i in range(NSEG):
+        seg[i] = vals[i]
+    return seg
+
+
+@jit
+def make_segment(sp, t0, x0, v0):
+    """Segment of free flight from state (x0, v0) at time t0, as a tuple (the layout of
+    ``seg``): no allocation, and no reference counting where it is passed on."""
     om = sp[OM]
     ph = om * t0
     cph = math.cos(ph)
     sph = math.sin(ph)
-    seg[T0] = t0
-    seg[CPH] = cph
-    seg[SPH] = sph
     if sp[RES] != 0.0:
         # x_p(s) = s sin(om s + ph) / (2 m om) = s (A cos om s + B sin om s)
-        seg[FC] = sph * sp[FA]
-        seg[FS] = cph * sp[FA]
+        fc = sph * sp[FA]
+        fs = cph * sp[FA]
         xp0 = 0.0
-        vp0 = seg[FC]
+        vp0 = fc
     else:
-        seg[FC] = sp[PP] * cph + sp[QQ] * sph
-        seg[FS] = sp[QQ] * cph - sp[PP] * sph
-        xp0 = seg[FC]
-        vp0 = om * seg[FS]
-    seg[H0] = x0 - xp0
-    seg[HV0] = v0 - vp0
-    seg[X0] = x0
-    seg[V0] = v0
-    return seg
+        fc = sp[PP] * cph + sp[QQ] * sph
+        fs = sp[QQ] * cph - sp[PP] * sph
+        xp0 = fc
+        vp0 = om * fs
+    return (t0, cph, sph, fc, fs, x0 - xp0, v0 - vp0, x0, v0)
 
 
 @jit

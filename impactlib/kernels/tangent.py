@@ -117,6 +117,36 @@ def _qr(j11, j12, j21, j22):
     return q11, w1 / r22, q21, w2 / r22, math.log(r11), math.log(r22)
 
 
+#: bounds of the leading column's size before it is rescaled (by a power of 2, exactly)
+COLUMN_BIG = 2.0 ** 256
+COLUMN_SMALL = 2.0 ** -256
+
+
+@jit
+def column_scale(j11, j21):
+    """(k, 2^-k) that bring the column (j11, j21) back to size 1 when it has left
+    [COLUMN_SMALL, COLUMN_BIG]; (0, 1) while it has not (or is zero)."""
+    a = max(abs(j11), abs(j21))
+    if COLUMN_SMALL <= a <= COLUMN_BIG or a == 0.0:
+        return 0.0, 1.0
+    k = math.frexp(a)[1]
+    return float(k), math.ldexp(1.0, -k)
+
+
+@jit
+def leading_logs(j11, j21, scaled, log_det):
+    """The logs (log|R11|, log|R22|) that QR steps over a window would have summed, from
+    the window's leading column (j11, j21) (the first column of J: only it grows like
+    log|R11| sums), the log2 ``scaled`` of the powers of 2 taken out of it, and the log of
+    |det J| over the window, log|R22| summing to log|det J| - log|R11|.  -inf for both
+    where the column vanished (sticking)."""
+    n = math.hypot(j11, j21)
+    if n == 0.0:
+        return -math.inf, -math.inf
+    l1 = math.log(n) + scaled * math.log(2.0)
+    return l1, log_det - l1
+
+
 @jit
 def tangent_product(a, jm):
     """jm <- A jm in place, A = (a11, a12, a21, a22), jm = [j11, j12, j21, j22]."""

@@ -12,27 +12,25 @@ from __future__ import annotations
 import math
 import time
 import dataclasses
-from collections import namedtuple
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..kernels._jit import jit
-from ..analysis.classify import (MAX_PERIOD, PERIOD_RTOL, Motion, classify, describe,
-                                 judge_motion, motion_class)
-from ..analysis.lyapunov import grows_without_bound, no_dissipation
+from ..analysis.classify import MAX_PERIOD, PERIOD_RTOL, Motion, describe, motion_class
+from ..analysis.lyapunov import grows_without_bound
 from ..kernels.events import step_caps
 from ..kernels.flight import G, OM, system_constants_rows
-from ..model import (PARAM_NAMES, MotionCode, Params, RunLimits, RunStatus, check_run,
-                     fastest_rate, rk4_stability_limits)
+from ..model import (PARAM_NAMES, Params, RunLimits, RunStatus, check_run, fastest_rate,
+                     rk4_stability_limits)
 from ..kernels import engine as E
 from ..kernels.engine import METHOD_IDS, Buffers
 from ..parallel import executor as _executor
-from ..parallel import run_blocks, worker_count
+from ..parallel import interleaved, run_blocks, worker_count
 from ..progress import reporter, stopped
 from ..kernels.entry import section_times
-from ..simulate import simulate
 from ..io.result import SweepResult
+from .verdicts import judge_aperiodic
 
 CAP_PER_VALUE = 4096        # impacts kept per value; more are counted, flagged in status
 
@@ -193,49 +191,6 @@ class RegimeMap(SweepResult):
         return self.motion(iy, ix).label
 
 
-# codes of classify's verdicts on aperiodic cells (RegimeMap)
-_VERDICT_CODES = {
-    "not settled": (MotionCode.NOT_SETTLED, MotionCode.INFINITE),
-    "undetermined": (MotionCode.UNDETERMINED, MotionCode.UNDETERMINED),
-    "unbounded": (MotionCode.UNBOUNDED, MotionCode.INFINITE),
-}
-
-
-#: what classify's verdict reads of a run (judge_motion), from a sweep's outputs
-SweepRun = namedtuple("SweepRun", "params method t_end t_record final n_impacts nsteps")
-
-
-def judge_aperiodic(p, name_x, vx, name_y, vy, impacts, period, finals, workers, **run_kw):
-    """classify()'s verdict on the run (settings ``run_kw``) of each cell of a regime map
-    whose points never repeated: whether it is chaotic is classify's call (one rule, the
-    Lyapunov criterion), measured from where the sweep's run of the cell ended
-    (``finals``, rows_kernel's, one row per cell).  Updates the codes in place; returns
-    {(iy, ix): Motion}."""
-    cells = np.argwhere((period == MotionCode.INFINITE) & (impacts != 0))
-    nx = vx.size
-
-    def judge(iy, ix):
-        q = p.replace(**{name_x: float(vx[ix]), name_y: float(vy[iy])})
-        if no_dissipation(q):
-            # the growth check reads every impact of the window; the sweep kept a few
-            return classify(simulate(q, **run_kw))
-        t, x, v, stuck, n_tot, nsteps = finals[iy * nx + ix].tolist()
-        run = SweepRun(q, run_kw["method"], run_kw["t_end"], run_kw["t_record"],
-                       (t, x, v, stuck != 0.0), int(n_tot), int(nsteps))
-        return judge_motion(describe(int(impacts[iy, ix]), int(period[iy, ix])), run)[0]
-
-    ex = _executor(workers)
-    futs = [ex.submit(judge, iy, ix) for iy, ix in cells]
-    motions = {}
-    for (iy, ix), fut in zip(cells, futs):
-        mo = fut.result()
-        if mo.kind != "chaotic":
-            impacts[iy, ix], period[iy, ix] = _VERDICT_CODES.get(
-                mo.kind, _VERDICT_CODES["undetermined"])
-        motions[(int(iy), int(ix))] = mo
-    return motions
-
-
 def _check_sweep(p, names, t_end, t_record, x0, v0, method, dt, rtol, atol):
     problems = []
     for name in names:
@@ -310,15 +265,6 @@ def _run_rows(sps, hmaxs, rates, method, x0s, v0, t_end, t_record, dt, rtol, ato
 
 #: output held by one block of jobs (impacts kept x jobs): bounds a block's size
 BLOCK_OUTPUT = 1 << 18
-#: jobs are taken in strides of this many, so neighbouring (similarly costly) values
-#: spread over the blocks
-INTERLEAVE = 16
-
-
-def interleaved(n: int, stride: int = INTERLEAVE) -> np.ndarray:
-    """0, s, 2s, ..., 1, 1 + s, ...: an order of n jobs in which every stretch samples
-    the whole range."""
-    return np.concatenate([np.arange(j, n, stride) for j in range(min(stride, n))])
 
 
 def run_jobs(sps, hmaxs, rates, x0s, v0s, *, method, t_end, t_record, dt, rtol, atol,
@@ -363,9 +309,10 @@ def _rows(values, order, T_of, out_t, out_v, counts, direction):
     """Row arrays (param, v, t, phase, index, direction) of runs of values[order]."""
     kept = np.minimum(counts, out_t.shape[1])
     idx = np.repeat(np.arange(len(kept)), kept)
-    mask = np.arange(out_t.shape[1])[None, :] < kept[:, None]
-    t = out_t[mask]
-    return (values[order][idx], out_v[mask], t, np.mod(t, T_of[order][idx]), order[idx],
+    # the kept prefix of each run's row of out_t (not a mask over all cap columns)
+    col = np.arange(idx.size) - np.repeat(np.cumsum(kept) - kept, kept)
+    t = out_t[idx, col]
+    return (values[order][idx], out_v[idx, col], t, np.mod(t, T_of[order][idx]), order[idx],
             np.full(idx.shape, direction, dtype=np.int8))
 
 
@@ -592,7 +539,8 @@ def lyapunov_sweep_kernel(sps, x0s, v0, t_end, t_record, hmaxs, rates, out_t, ou
                           status, finals, lyap, warm, max_impacts, max_steps):
     """sweep_kernel (exact method, no classification) with the tangent carried
     along by the engine: lyap[i] = (sum log|R11|, sum log|R22|, stuck in window, impacts in window)
-    of value i over its window [t0 + t_record, t0 + t_end]."""
+    of value i over its window [t0 + t_record, t0 + t_end] (the sums from the leading
+    column, engine.LEADING)."""
     nvals = sps.shape[0]
     marks = np.empty(2)
     logs = np.zeros((1, 2))
@@ -616,7 +564,7 @@ def lyapunov_sweep_kernel(sps, x0s, v0, t_end, t_record, hmaxs, rates, out_t, ou
         logs[0, 0] = 0.0
         logs[0, 1] = 0.0
         ctl = E.controls(t0 + t_end, t0 + t_record, hmaxs[i], rates[i], 0.0, 0.0, 0.0,
-                         max_impacts, max_steps, E.EXACT, E.QR_MARKS)
+                         max_impacts, max_steps, E.EXACT, E.LEADING)
         buf = Buffers(out_t[i], out_v[i], stick, none, none, none, none, none, none, marks,
                       logs)
         st = E.run_engine(sp, ctl, t0, x, v, buf, res)

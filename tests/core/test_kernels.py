@@ -11,6 +11,7 @@ from numba import njit
 import impactlib as il
 from impactlib.kernels import events as E
 from impactlib.kernels import flight as F
+from impactlib.kernels import grid as GR
 from impactlib.verify.reference import mp_state
 
 from core_helpers import EPS, PAPER
@@ -147,8 +148,8 @@ def test_searches_find_the_first_root_of_a_shallow_dip(delta, omega):
         sp = constants(p)
         sp_rate = p.rate()
         hmax = float(E.step_caps(sp))
-        grid = E.search_grid(sp, sp_rate)
-        assert grid[E.GSTEP] > 0.0
+        grid = GR.search_grid(sp, sp_rate)
+        assert grid[GR.GSTEP] > 0.0
         seg = F.start_segment(sp, t0, x0, v0)
         t_ref = _first_dip_root(p, t0, A, phi, delta)
         v_root = A * omega * math.sqrt(2 * delta - delta * delta)
@@ -156,7 +157,7 @@ def test_searches_find_the_first_root_of_a_shallow_dip(delta, omega):
         s_end = 3 * p.T + (t_ref - t0)
         results = [E.next_impact(sp, seg, s_end, hmax, 10**6)]
         for guess in (-1.0, t_ref - t0 + p.T, float(rng.uniform(0.0, 2 * (t_ref - t0)))):
-            results.append(E.next_impact_grid(sp, seg, s_end, hmax, 10**6, grid, guess))
+            results.append(GR.next_impact_grid(sp, seg, s_end, hmax, 10**6, grid, guess))
         for kind, s, v, n in results:
             assert kind == E.IMPACT
             assert abs(t0 + s - t_ref) <= tol, (delta, t0, s, t_ref - t0)
@@ -174,12 +175,12 @@ def test_searches_do_not_invent_an_impact_at_a_near_miss(delta):
         p = PAPER.replace(g=-A * (1.0 + delta))
         sp = constants(p)
         hmax = float(E.step_caps(sp))
-        grid = E.search_grid(sp, p.rate())
+        grid = GR.search_grid(sp, p.rate())
         seg = F.start_segment(sp, t0, x0, v0)
         s_end = 5 * p.T
         t_min = _first_dip_root(p, t0, A, phi, 0.0)      # where the orbit is lowest
         for kind, s, v, n in [E.next_impact(sp, seg, s_end, hmax, 10**6)] + [
-                E.next_impact_grid(sp, seg, s_end, hmax, 10**6, grid, guess)
+                GR.next_impact_grid(sp, seg, s_end, hmax, 10**6, grid, guess)
                 for guess in (-1.0, t_min - t0)]:
             assert kind == E.NO_IMPACT and s == s_end
 
@@ -209,6 +210,43 @@ def test_short_hops_match_the_certified_walk_and_mpmath():
     assert taken >= 10
 
 
+def test_hops_landing_in_the_first_grid_interval_match_the_walk_and_mpmath():
+    """Chatter hops too long for the Taylor short hop that land inside the grid's first
+    interval (Newton on the closed form, certified by cubic bounds forward from the wall
+    and backward from the root) agree with the certified walk (next_impact) to a few
+    ulps of t, and a sample with the mpmath reference's first impact."""
+    from impactlib.verify.reference import mp_impacts
+
+    p = PAPER.replace(omega=0.2)
+    sp = constants(p)
+    hmax = float(E.step_caps(sp))
+    grid = GR.search_grid(sp, p.rate())
+    h = grid[GR.GSTEP]
+    sol = il.simulate(p, t_end=300.0, t_record=0.0)
+    taken = fewer = 0
+    for t, v in zip(sol.impacts.t, sol.impacts.v):
+        u = -p.r * v
+        seg = F.start_segment(sp, t, p.g, u)
+        if u <= 0.0 or E.short_hop(sp, seg, 100.0)[0]:
+            continue
+        k1, s1, v1, n1 = E.next_impact(sp, seg, 100.0, hmax, 10**6)
+        if not (k1 == E.IMPACT and s1 < h):
+            continue
+        k2, s2, v2, n2 = GR.next_impact_grid(sp, seg, 100.0, hmax, 10**6, grid, -1.0)
+        assert k2 == E.IMPACT
+        assert abs(s2 - s1) <= 8 * EPS * (t + s1), (t, s1, s2)
+        # v moves by the acceleration times the time's rounding
+        a = F.flight_state(sp, seg, s1)[2]
+        assert abs(v2 - v1) <= 8 * EPS * (t + s1) * abs(a) + 64 * EPS * abs(v1), (t, v1, v2)
+        fewer += n2 < n1
+        if taken % 8 == 0:
+            ref = mp_impacts(p, 1, x0=p.g, v0=float(u), t0=float(t))
+            assert abs(t + s2 - ref.t[0]) <= 8 * EPS * (t + s2)
+        taken += 1
+    # the grid search took them itself, not by falling back to the walk
+    assert taken >= 20 and fewer >= 0.9 * taken, (taken, fewer)
+
+
 @njit
 def _caller(sp, seg, s_end, hmax, grid, ts):
     # a user's own njit code calling the kernels
@@ -216,14 +254,14 @@ def _caller(sp, seg, s_end, hmax, grid, ts):
     for i in range(ts.shape[0]):
         out[i] = F.flight_state(sp, seg, ts[i])[0]
     k1, s1, v1, n1 = E.next_impact(sp, seg, s_end, hmax, 10**6)
-    k2, s2, v2, n2 = E.next_impact_grid(sp, seg, s_end, hmax, 10**6, grid, -1.0)
+    k2, s2, v2, n2 = GR.next_impact_grid(sp, seg, s_end, hmax, 10**6, grid, -1.0)
     return out, s1, s2
 
 
 def test_kernels_are_callable_from_njit_code():
     sp = constants(PAPER)
     seg = F.start_segment(sp, 3.0, 0.0, 1.5)
-    grid = E.search_grid(sp, PAPER.rate())
+    grid = GR.search_grid(sp, PAPER.rate())
     ts = np.linspace(0.0, 2.0, 5)
     xs, s1, s2 = _caller(sp, seg, 50.0, float(E.step_caps(sp)), grid, ts)
     np.testing.assert_array_equal(xs, [F.flight_state(sp, seg, t)[0] for t in ts])

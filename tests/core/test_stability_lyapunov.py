@@ -7,6 +7,8 @@ import numpy as np
 import pytest
 
 import impactlib as il
+from impactlib.kernels import engine as E
+from impactlib.simulate import run_constants
 
 from core_helpers import PAPER
 
@@ -107,3 +109,29 @@ def test_bifurcation_strip_warm_start_rows_unchanged():
 def test_bad_lyapunov_input_names_the_field(call, field):
     with pytest.raises(ValueError, match=field):
         call()
+
+
+def _window_logs(p, mode, marks, t_end):
+    sp, rate, hmax = run_constants(p)
+    logs = np.zeros((marks.size - 1, 2))
+    ctl = E.controls(t_end, marks[0], hmax, rate, 0.0, 0.0, 0.0, 1e6, 10**8, E.EXACT, mode)
+    res = np.empty(E.NRES)
+    E.run_engine(sp, ctl, 0.0, max(0.0, p.g), 0.0, E.buffers(marks=marks, logs=logs), res)
+    return logs, res
+
+
+@pytest.mark.parametrize("omega, r", [(2.0, 0.8), (2.8, 0.8), (1.2, 0.8), (4.0, 0.3)])
+def test_leading_column_logs_are_the_qr_sums(omega, r):
+    """The diagram strip's bookkeeping (engine.LEADING: J's first column, rescaled by
+    powers of 2, and |det J| from its closed form) against QR steps at every impact
+    (QR_MARKS): the same window logs to rounding, in every window, for periodic and
+    chaotic motions.  log|R22| comes from the determinant in one and from the QR
+    steps in the other, so a wrong determinant (a missed impact, the damping's sign)
+    shows."""
+    p = PAPER.replace(omega=omega, r=r)
+    marks = np.linspace(200.0, 600.0, 5)
+    qr, res_qr = _window_logs(p, E.QR_MARKS, marks, 650.0)
+    lead, res_lead = _window_logs(p, E.LEADING, marks, 650.0)
+    assert res_qr[1] == res_lead[1] and res_qr[2] == res_lead[2]       # the same run
+    scale = np.abs(qr).max(axis=1, keepdims=True) + 1.0
+    np.testing.assert_allclose(lead, qr, rtol=0, atol=1e-12 * scale.max())
