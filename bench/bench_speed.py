@@ -737,8 +737,8 @@ def report(m, cfg, r):
     add("## Targets (issues 12 and 18)")
     add("")
     add("Where issue 18 sharpened a target of issue 12 (trajectory, ratio, diagram), the "
-        "sharper one is listed. Where they are missed, the section 'Where the issue 18 "
-        "targets are missed' below explains it with a profile.")
+        "sharper one is listed. The section \"Issue 18's targets: where the time goes\" "
+        "below (bench/bench_misses.py) profiles each of issue 18's.")
     add("")
     tr = traj["exact"]
     pr, sc = r["proto"], r["scale"]

@@ -32,8 +32,12 @@ def served():
 
     Unused sessions are discarded after ~1 s (instead of Bokeh's 15-30 s), so memory
     checks after sessions close do not have to wait half a minute."""
+    import impactlib as il
     from rel_server import Served
 
+    # the kernels compiled first, as scripts/app.sh does before serving: a cold compile
+    # inside the first session's diagram would count against its time limit
+    il.warmup()
     srv = Served("served.log", extra_args=["--check-unused-sessions", "500",
                                            "--unused-session-lifetime", "1000"])
     yield srv

@@ -46,10 +46,11 @@ def _seen(doc) -> dict:
 
 
 @pytest.mark.timeout(120)
-@pytest.mark.parametrize("page", [True, False], ids=["page", "websocket-only"])
-def test_light_client_sees_what_bokehs_client_sees(served, page):
+# (not named ``page``: pytest-playwright would take it for its browser page fixture)
+@pytest.mark.parametrize("get_page", [True, False], ids=["page", "websocket-only"])
+def test_light_client_sees_what_bokehs_client_sees(served, get_page):
     offset = served.log_offset()
-    light = open_light_session(served.url, page=page)
+    light = open_light_session(served.url, page=get_page)
     try:
         bokeh = BokehClient(served.url)
         try:
