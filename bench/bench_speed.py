@@ -571,12 +571,16 @@ def report(m, cfg, r):
         + ("**Quick mode: smaller/fewer runs; not the reference figures.** " if cfg["quick"] else "")
         + "Accuracy figures are in BENCHMARKS-accuracy.md.")
     add("")
-    add("**Noise warning.** These figures were taken on a shared 2-core machine while other "
-        "jobs ran (load average at start / end: "
-        f"{' '.join(f'{x:.2f}' for x in m['load_start'])} / "
-        f"{' '.join(f'{x:.2f}' for x in m['load_end'])}). Ratios are formed within one run, "
-        "so they are more robust than absolute times, but the final figures should come from "
-        "a re-run on a quiet machine.")
+    loads = (f"{' '.join(f'{x:.2f}' for x in m['load_start'])} / "
+             f"{' '.join(f'{x:.2f}' for x in m['load_end'])}")
+    if m["load_start"][0] < 1.0:
+        add(f"Taken with no other job running (load average at start / end: {loads}; the "
+            "benchmark's own threads raise it). Ratios are formed within one run.")
+    else:
+        add("**Noise warning.** These figures were taken on a shared 2-core machine while "
+            f"other jobs ran (load average at start / end: {loads}). Ratios are formed "
+            "within one run, so they are more robust than absolute times, but the final "
+            "figures should come from a re-run on a quiet machine.")
     add("")
     add("## Machine")
     add("")

@@ -308,12 +308,27 @@ def run_jobs(sps, hmaxs, rates, x0s, v0s, *, method, t_end, t_record, dt, rtol, 
 def _rows(values, order, T_of, out_t, out_v, counts, direction):
     """Row arrays (param, v, t, phase, index, direction) of runs of values[order]."""
     kept = np.minimum(counts, out_t.shape[1])
-    idx = np.repeat(np.arange(len(kept)), kept)
-    # the kept prefix of each run's row of out_t (not a mask over all cap columns)
-    col = np.arange(idx.size) - np.repeat(np.cumsum(kept) - kept, kept)
-    t = out_t[idx, col]
-    return (values[order][idx], out_v[idx, col], t, np.mod(t, T_of[order][idx]), order[idx],
-            np.full(idx.shape, direction, dtype=np.int8))
+    m = int(kept.sum())
+    return _gather_rows(values, np.asarray(order, dtype=np.int64), T_of, out_t, out_v, kept,
+                        m, direction)
+
+
+@jit
+def _gather_rows(values, order, T_of, out_t, out_v, kept, m, direction):
+    # one pass over the kept prefix of each run's row of out_t, off the GIL: a sweep's
+    # threads build their blocks' rows at once (numpy's dozen calls per block held it)
+    param, v, t = np.empty(m), np.empty(m), np.empty(m)
+    phase, index = np.empty(m), np.empty(m, dtype=np.int64)
+    dirs = np.full(m, direction, dtype=np.int8)
+    j = 0
+    for i in range(kept.shape[0]):
+        o = order[i]
+        for c in range(kept[i]):
+            ti = out_t[i, c]
+            param[j], v[j], t[j], index[j] = values[o], out_v[i, c], ti, o
+            phase[j] = np.mod(ti, T_of[o])
+            j += 1
+    return param, v, t, phase, index, dirs
 
 
 def bifurcation(p: Params, name: str, values, t_end: float = 500.0, t_record: float = 250.0,
