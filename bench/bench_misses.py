@@ -26,6 +26,7 @@ import datetime as _dt
 import os
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -90,6 +91,35 @@ def trajectory(calls):
                 proto_impacts=int(n_p))
 
 
+def machine_ceiling(reps, n=1000):
+    """What two threads of this machine give a jitted, GIL-free workload with nothing
+    between its calls: n paper-default runs of the engine's entry on one thread, against
+    n on each of two threads at once (interleaved repeats, medians)."""
+    none = np.empty(0)
+    limits = RunLimits()
+
+    def work():
+        for _ in range(n):
+            simulate_run(PAPER.m, PAPER.c, PAPER.k, PAPER.g, PAPER.r, PAPER.omega, 0.0, 0.0,
+                         0.0, T_RECORD, T_END, 0.0, E.EXACT, 0.0, 1e-6, 1e-9, 1e6,
+                         limits.max_steps, none)
+
+    work()
+    one, two = [], []
+    for _ in range(reps):
+        tic = time.perf_counter()
+        work()
+        one.append(time.perf_counter() - tic)
+        threads = [threading.Thread(target=work) for _ in range(2)]
+        tic = time.perf_counter()
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join()
+        two.append(time.perf_counter() - tic)
+    return 2 * float(np.median(one)) / float(np.median(two))
+
+
 def diagram(reps):
     def one(w):
         return lambda: il.bifurcation(PAPER, "omega", OMEGAS, T_END, T_RECORD, workers=w)
@@ -105,7 +135,8 @@ def diagram(reps):
         c2.append(c)
     prof = profile_diagram()
     return {"wall1": float(np.median(w1)), "cpu1": float(np.median(c1)),
-            "wall2": float(np.median(w2)), "cpu2": float(np.median(c2)), "prof": prof}
+            "wall2": float(np.median(w2)), "cpu2": float(np.median(c2)), "prof": prof,
+            "ceiling": machine_ceiling(max(reps, 9))}
 
 
 def regime(n, stride=8):
@@ -199,7 +230,9 @@ def markdown(t, d, m):
         f"({p['n_blocks']} blocks). CPU of the 1-thread sweep beyond the kernels: "
         f"{ms(max(0.0, d['cpu1'] - p['total']))} (sweep setup {ms(p['setup'])}; the rest "
         f"is each block's Python and the output). With 2 threads the process got "
-        f"{d['cpu2'] / d['wall2']:.2f} cores on this machine |",
+        f"{d['cpu2'] / d['wall2']:.2f} cores on this machine; the engine alone, as two "
+        f"independent threads with nothing between its calls, scales "
+        f"{d['ceiling']:.2f}x here (the machine's ceiling for this work) |",
         f"| {m['n']} x {m['n']} regime map <= 2.5 s "
         f"| {m['wall']:.2f} s wall, {m['cpu']:.2f} s CPU | {_met(map_ok)} | {cells} |",
     ]
