@@ -320,6 +320,12 @@ class DiagramCache:
             while done and (size > self.max_bytes or len(done) > self.max_items):
                 size -= self._items.pop(done.pop(0)).nbytes
 
+    def complete(self, run: Run) -> bool:
+        """The diagram of ``run`` is here, finished (following it sends it at once)."""
+        with self._lock:
+            shared = self._items.get(run.diagram_key())
+            return shared is not None and shared.finished and shared.error is None
+
     def clear(self) -> None:
         with self._lock:
             self._items.clear()

@@ -51,6 +51,9 @@ _BRANCH_POOL = ThreadPoolExecutor(max_workers=1, thread_name_prefix="impact-bran
 #: Threads that drive regime maps and basins (each drives the core's own pool): at most
 #: this many sessions compute one at a time, the others wait their turn.
 _RESEARCH_POOL = ThreadPoolExecutor(max_workers=2, thread_name_prefix="impact-research")
+#: How long a served session's build waits for its first scene (s): one from the shared
+#: cache takes a few ms and then goes out with the page; a longer one follows it.
+SCENE_GRACE = 0.05
 
 
 class Explorer(pn.viewable.Viewer):
@@ -71,7 +74,7 @@ class Explorer(pn.viewable.Viewer):
         doc = self._doc = session_doc()
         dispatch = self._loop = loop if loop is not None else SessionLoop(doc)
         background = doc is not None or loop is not None     # jobs in the pools
-        self._loaded = doc is None        # served: the diagram starts once the page is up
+        self._loaded = doc is None        # served: a diagram to compute starts once the page is up
         self.views = [cls(kit) for kit in [Kit()] for cls in VIEWS]
         for view in self.views:
             setattr(self, view.key, view)
@@ -134,6 +137,10 @@ class Explorer(pn.viewable.Viewer):
             pn.state.on_session_destroyed(self._on_session_destroyed)
             pn.state.onload(self._on_load)
             restore_on_history(doc)
+            # a scene from the shared cache comes back in milliseconds: give it that long,
+            # so that it goes out with the page (and any diagram from the cache with it)
+            self.scene_job.sent.wait(SCENE_GRACE)
+            dispatch.built()
 
     def __panel__(self):
         return self.controls.layout
@@ -285,7 +292,7 @@ class Explorer(pn.viewable.Viewer):
         self._loop.ready()
         with pn.io.hold(self._doc):
             self._loaded = True
-            self.diagram.restart(self._wanted, start=True)
+            self.diagram.start()
             self._write_url()
 
     def _request_window(self, run, start, end, pixels) -> None:

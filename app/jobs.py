@@ -44,6 +44,10 @@ class SessionLoop:
     (``panel.io.document.hold`` discards them while the session is not connected,
     counting on the full document it serves), so a result applied in that gap would
     never reach the page. Until then, functions wait in order and run at ``ready()``.
+    Before the pull there is no gap: ``built()``, called on the loop thread as the
+    session's build ends, runs what arrived so far at once, into the page the browser
+    pulls (a result from the shared caches goes out with the page, not as a patch
+    after it).
 
     The order is kept here, not left to Bokeh: ``doc.add_next_tick_callback`` called
     from a worker thread while the loop thread holds the document has its
@@ -73,6 +77,11 @@ class SessionLoop:
             if not self._ready:
                 return
         self._io_loop.add_callback(self._wake)
+
+    def built(self) -> None:
+        """The session's page is built and not pulled yet (call on the loop thread): what
+        waits runs now, and goes out with the page."""
+        self._drain()
 
     def ready(self) -> None:
         """The page is up: run what waited, and from now on run at the next tick."""
@@ -249,6 +258,7 @@ class Job:
         self.generation = 0
         self.done = threading.Event()
         self.done.set()
+        self.sent = threading.Event()          # a result is on its way to the loop
         self._ticket: Ticket | None = None     # the newest request
         self._waiting: Ticket | None = None    # submitted while the worker was busy
         self._busy = False
@@ -311,6 +321,7 @@ class Job:
             ticket.finish()
         try:
             self.dispatch(deliver)
+            self.sent.set()
         except Exception as exc:            # the session went away
             log.info("%s: result dropped: %s", self.name, exc)
             self.cancel()

@@ -38,14 +38,18 @@ class SessionDiagram:
                                  req[0], req[1], lambda: t.live),
                              dispatch, pool=branch_pool, on_result=self._classes_done)
         self.run = None                   # the run the diagram is for
+        self._started = False             # its job submitted
         self.parts: list[dict] = []       # its chunks so far (branch seeds)
         self.end = None                   # "complete", "partial (time limit)", "failed"
         self._branches = False            # the overlay is on
 
     def restart(self, run, start: bool) -> None:
         """A new diagram for ``run``: views cleared, status "computing"; the job starts
-        when ``start`` (a served page starts it once the page is up)."""
+        when ``start`` (a served page starts it once the page is up, see ``start``), or
+        at once when the diagram is complete in the shared cache (nothing to compute:
+        a page being built gets it with its first pull)."""
         self.run, self.parts, self.end = run, [], None
+        self._started = False
         self.class_job.cancel()
         if run.branches:
             self.branch_job.cancel()
@@ -54,8 +58,14 @@ class SessionDiagram:
         for view in self._views:
             view.diagram_started(run)
         self._controls.show_diagram(f"computing {diagram.what(run)}…", 0)
-        if start:
-            self.job.submit(run)
+        if start or diagram.CACHE.complete(run):
+            self.start()
+
+    def start(self) -> None:
+        """Start the job for the diagram of the last restart, unless it is started."""
+        if self.run is not None and not self._started:
+            self._started = True
+            self.job.submit(self.run)
 
     def show_branches(self, on: bool) -> None:
         """Branch overlay: off, waiting for the diagram, or computed from its chunks."""

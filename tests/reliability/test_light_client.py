@@ -229,3 +229,18 @@ def test_the_page_token_and_cookies_go_with_the_websocket(misbehaving):
     assert headers["Sec-Websocket-Protocol"] == "bokeh, tok-from-page"
     assert headers["Cookie"] == "impact_route=r42"
     assert headers["Origin"] == url.rsplit("/", 1)[0]
+
+
+@pytest.mark.timeout(120)
+def test_a_page_gets_its_cached_scene_and_diagram_in_its_first_pull(served):
+    """Results the shared caches hold are in the document the page pulls, not sent as
+    patches after its "document ready": a second page of the same settings has its five
+    views' data and its complete diagram in the pull itself."""
+    offset = served.log_offset()
+    with open_light_session(served.url) as first:           # fills the caches
+        assert _complete(first)
+    with open_light_session(served.url, browser=False) as second:
+        doc = second.document                  # as pulled (no document_ready sent yet)
+        assert five_views(doc), _seen(doc)["columns"]
+        assert diagram_complete(doc), doc.get_model_by_name("bifurcation_status").text
+    assert served.bad_log_lines(offset) == []
