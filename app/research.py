@@ -53,8 +53,8 @@ FIXED_CLASSES = ("complete chattering", "chaotic", "no impact", "not settled",
                  "undetermined", "unbounded", "other periodic", "other")
 FIXED_COLOURS = ("#7b3294", "#1b1b1b", "#d9d9d9", "#f4a6b8", "#ffffff", "#b2182b",
                  "#bf9f6a", "#8c8c8c")
-#: Periodic (m, n) classes get their own colour, in order of appearance, up to this
-#: cut-off; later ones are "other periodic".
+#: Periodic (m, n) classes get their own colour, in order of appearance (row by row, cell
+#: by cell), up to this cut-off; later ones are "other periodic".
 PERIODIC_COLOURS = ("#4e79a7", "#59a14f", "#f28e2b", "#76b7b2", "#edc948", "#e15759",
                     "#b07aa1", "#9c755f", "#17becf", "#a0cbe8", "#8cd17d", "#ffbe7d")
 PALETTE = FIXED_COLOURS + PERIODIC_COLOURS
@@ -84,9 +84,13 @@ class RegimeClasses:
 
     def classes(self, impacts: np.ndarray, period: np.ndarray) -> np.ndarray:
         """Class index of each cell (same shape as the code arrays); counts updated."""
-        pairs, inverse = np.unique(np.stack([impacts.ravel(), period.ravel()], axis=1),
-                                   axis=0, return_inverse=True)
-        idx = np.array([self.index(int(m), int(n)) for m, n in pairs], dtype=np.int64)
+        pairs, first, inverse = np.unique(np.stack([impacts.ravel(), period.ravel()], axis=1),
+                                          axis=0, return_index=True, return_inverse=True)
+        idx = np.empty(len(pairs), dtype=np.int64)
+        # colours in order of first appearance cell by cell, row by row: the same whatever
+        # the blocks the rows came in (their sizes follow the measured rate)
+        for j in np.argsort(first, kind="stable"):
+            idx[j] = self.index(int(pairs[j, 0]), int(pairs[j, 1]))
         out = idx[inverse.ravel()].reshape(impacts.shape)
         np.add.at(self.counts, out.ravel(), 1)
         return out

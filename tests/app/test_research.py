@@ -12,6 +12,7 @@ import pytest
 from bokeh.events import Tap
 
 import impactlib as il
+from impactlib.analysis.classify import describe
 from app import research, state
 from app.research_panel import BASINS, MAP
 
@@ -251,3 +252,32 @@ def test_a_picture_says_when_its_settings_changed(make_explorer):
     assert "settings changed" in m.text
     e.research.compute(MAP)
     assert "settings changed" not in m.text
+
+
+def test_map_colours_do_not_depend_on_the_blocks_the_rows_came_in():
+    """The app streams a map in blocks sized by the measured rate, so the same link
+    arrives in other blocks from one visit to the next: each periodic class keeps the
+    colour of its first cell, row by row (checked against that order computed from the
+    whole grid at once), whatever the blocks, and so does the legend's cut-off."""
+    rng = np.random.default_rng(7)
+    # 16 periodic classes (more than the palette's 12) and two fixed ones, scattered
+    codes = [(1, 1), (1, 2), (2, 1), (2, 2), (3, 3), (1, 3), (2, 4), (4, 2), (3, 1),
+             (1, 4), (2, 3), (3, 2), (4, 4), (5, 5), (1, 5), (2, 5), (0, 0), (-1, 0)]
+    pick = rng.integers(0, len(codes), size=(40, 25))
+    impacts = np.array([[codes[k][0] for k in row] for row in pick])
+    period = np.array([[codes[k][1] for k in row] for row in pick])
+    order = []                                  # periodic classes by first cell, row-major
+    for m, n in zip(impacts.ravel(), period.ravel()):
+        if m > 0 and n > 0 and (m, n) not in order:
+            order.append((m, n))
+    expected = {describe(m, n).label for m, n in order[:len(research.PERIODIC_COLOURS)]}
+    legends = []
+    for sizes in ([40], [1] * 40, [3, 7, 11, 19], [25, 15]):
+        classes, a = research.RegimeClasses(), 0
+        for size in sizes:
+            classes.classes(impacts[a:a + size], period[a:a + size])
+            a += size
+        coloured = set(classes.labels[len(research.FIXED_CLASSES):])
+        assert coloured == expected, sizes
+        legends.append(classes.legend())
+    assert all(leg == legends[0] for leg in legends)
