@@ -300,12 +300,12 @@ def open_session(url: str, args: dict | None = None, retries: int = 3):
             session = ClientSession(websocket_url=websocket_url_for_server_url(url),
                                     arguments=args or {})
             session.connect()
-            # "document ready" goes out before the pull: Panel drops model changes made
-            # between a pull and that event (it counts on the full document it serves),
-            # and a client that announces itself only after pulling can lose the first
-            # scene. A browser does not hit this (checked in Chromium, also under load).
-            send_document_ready(session)
+            # pull, then "document ready", as a browser does (and rel_light_client.py):
+            # a client that announces itself first sets the diagram going before its
+            # pull, and a streamed chunk both in the pulled document and in a patch
+            # kept while waiting would be drawn twice
             session.pull()
+            send_document_ready(session)
         except Exception:           # noqa: BLE001 - retried, then re-raised
             if attempt == retries - 1:
                 raise
