@@ -1,8 +1,9 @@
 """The diagram in any parameter, in headless Chromium: switching the swept parameter and
 tapping the diagram. Helpers come from test_app_browser (same server fixture)."""
+import re
 import time
 
-from test_app_browser import JS, open_app, open_settings, query, text
+from test_app_browser import JS, READY, open_app, open_settings, query, text
 
 #: Page position (CSS px) of data point (x, y) of a figure: the plot's view maps data to
 #: canvas pixels; the canvas element's box places them on the page.
@@ -75,3 +76,31 @@ def test_sweep_both_draws_up_and_down(page, server):
         "() => ie.len('bifurcation_up') > 0 && ie.len('bifurcation_down') > 0 &&"
         " ie.title('bifurcation_figure').includes('complete')", timeout=30_000)
     assert page.evaluate("ie.len('bifurcation')") == 0
+
+
+def _dots_and_count(page) -> tuple[int, int]:
+    """(dots in the diagram's source, distinct points its status line says it drew)."""
+    status = text(page, "ie-diagram-status")
+    m = re.search(r"(\d+) distinct points drawn", status)
+    assert m, status
+    return page.evaluate("ie.len('bifurcation')"), int(m.group(1))
+
+
+def test_a_page_joining_a_diagram_under_way_draws_what_its_status_counts(page, server):
+    """A second page opened while the first one's diagram streams (a link new to the
+    server, so nothing is cached) follows the same computation: each page holds as many
+    dots as its status line says, and both the same."""
+    query_ = "?r=0.731&bif_n=2000"
+    other = page.context.new_page()
+    try:
+        page.goto(server.url + query_)
+        other.goto(server.url + query_)
+        for p in (page, other):
+            p.wait_for_function(READY, timeout=60_000, polling=100)
+            p.evaluate(JS)
+            diagram_ready(p, "2000 ω values")
+        first, second = _dots_and_count(page), _dots_and_count(other)
+    finally:
+        other.close()
+    assert first[0] == first[1] and second[0] == second[1]
+    assert first == second
