@@ -21,7 +21,7 @@ from .flight import derivative_bounds, flight_state
 
 # layout of the per-run grid array: step, the homogeneous flow over one step
 # (h, h') -> [[P11, P12], [P21, P22]] (h, h'), the forcing's rotation by omega step, and
-# the same two over a double step (the stride far from the wall)
+# the same two over a double step (the stride far from the wall), in the same order
 GSTEP, P11, P12, P21, P22, GCOS, GSIN, D11, D12, D21, D22, DCOS, DSIN, NGRID = range(14)
 #: grid step of next_impact_grid, in units of 1 / (fastest rate of the run)
 GRID_STEP = 0.5
@@ -155,6 +155,18 @@ def _newton_root(sp, seg, s, lo, hi):
 
 
 @jit
+def _grid_step(grid, o, hh, hd, cph, sph, pp, qq, om, g):
+    """One step along the grid (o = P11) or a double step (o = D11) from the node
+    (hh, hd, cph, sph): the next node's homogeneous part and forcing phase, and there
+    f = x - g and its slope."""
+    hh1 = grid[o] * hh + grid[o + 1] * hd
+    hd1 = grid[o + 2] * hh + grid[o + 3] * hd
+    cph1 = cph * grid[o + 4] - sph * grid[o + 5]
+    sph1 = sph * grid[o + 4] + cph * grid[o + 5]
+    return hh1, hd1, cph1, sph1, hh1 + pp * cph1 + qq * sph1 - g, hd1 + om * (qq * cph1 - pp * sph1)
+
+
+@jit
 def next_impact_grid(sp, seg, s_end, hmax, max_steps, grid, s_guess):
     """:func:`next_impact` with fewer closed-form evaluations and the same guarantee.
 
@@ -224,12 +236,8 @@ def next_impact_grid(sp, seg, s_end, hmax, max_steps, grid, s_guess):
         if stride and n > 0:
             s2 = s + 2.0 * h
             if s2 < s_end:
-                hh2 = grid[D11] * hh + grid[D12] * hd
-                hd2 = grid[D21] * hh + grid[D22] * hd
-                cph2 = cph * grid[DCOS] - sph * grid[DSIN]
-                sph2 = sph * grid[DCOS] + cph * grid[DSIN]
-                f2 = hh2 + pp * cph2 + qq * sph2 - g
-                v2 = hd2 + om * (qq * cph2 - pp * sph2)
+                hh2, hd2, cph2, sph2, f2, v2 = _grid_step(grid, D11, hh, hd, cph, sph,
+                                                          pp, qq, om, g)
                 if min(min(fs, fs + vs * h23), min(f2 - v2 * h23, f2)) > herm2 + rnd_step * (nodes + 1.0):
                     n += 1
                     nodes += 1.0
@@ -240,12 +248,7 @@ def next_impact_grid(sp, seg, s_end, hmax, max_steps, grid, s_guess):
         s1 = s + h
         if s1 >= s_end:
             break
-        hh1 = grid[P11] * hh + grid[P12] * hd
-        hd1 = grid[P21] * hh + grid[P22] * hd
-        cph1 = cph * grid[GCOS] - sph * grid[GSIN]
-        sph1 = sph * grid[GCOS] + cph * grid[GSIN]
-        f1 = hh1 + pp * cph1 + qq * sph1 - g
-        v1 = hd1 + om * (qq * cph1 - pp * sph1)
+        hh1, hd1, cph1, sph1, f1, v1 = _grid_step(grid, P11, hh, hd, cph, sph, pp, qq, om, g)
         n += 1
         nodes += 1.0
         rnd = rnd_step * nodes
@@ -285,12 +288,8 @@ def next_impact_grid(sp, seg, s_end, hmax, max_steps, grid, s_guess):
                 guess = s + _hermite_root(fs, vs, f1, v1, h)
         elif s + 2.0 * h < s_end:
             # the crossing may lie just past the node: look one interval further
-            hh2 = grid[P11] * hh1 + grid[P12] * hd1
-            hd2 = grid[P21] * hh1 + grid[P22] * hd1
-            cph2 = cph1 * grid[GCOS] - sph1 * grid[GSIN]
-            sph2 = sph1 * grid[GCOS] + cph1 * grid[GSIN]
-            f2 = hh2 + pp * cph2 + qq * sph2 - g
-            v2 = hd2 + om * (qq * cph2 - pp * sph2)
+            hh2, hd2, cph2, sph2, f2, v2 = _grid_step(grid, P11, hh1, hd1, cph1, sph1,
+                                                      pp, qq, om, g)
             hi = s + 2.0 * h
             if f2 <= 0.0 and not lo < s_guess <= hi:
                 guess = s + h + _hermite_root(f1, v1, f2, v2, h)
